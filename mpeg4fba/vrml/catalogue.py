@@ -1,0 +1,138 @@
+"""The node catalogue: every VRML97 node and the MPEG-4 face nodes, read from data.
+
+The table is ``data/nodes.tsv`` (one row per field, in the spec's order); this module
+only turns it into typed records.
+
+Example
+-------
+>>> NODE_TYPES["Transform"].fields["translation"].default
+(0.0, 0.0, 0.0)
+>>> NODE_TYPES["Shape"].fields["geometry"].accepts
+('geometry',)
+>>> NODE_TYPES["FAP"].field("raise_b_lip_lm").name   # Visual spelling -> BIFS field
+'lower_b_lip_lm'
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field as _field
+from importlib import resources
+from typing import Any, Optional
+
+from .fields import FIELD_TYPES, FieldType
+
+__all__ = ["FieldDecl", "Interface", "NodeType", "NODE_TYPES", "EVENT_KINDS", "VRML97_NODES"]
+
+EVENT_KINDS = ("eventIn", "eventOut", "field", "exposedField")
+
+
+@dataclass(eq=False)
+class FieldDecl:
+    """One field or event of a node interface: ``exposedField SFVec3f translation 0 0 0``.
+
+    ``default`` is the value (for PROTO and Script declarations, the declared value);
+    ``accepts`` the node classes an SFNode/MFNode field may hold (None: any).
+    """
+
+    kind: str
+    type: FieldType
+    name: str
+    default: Any = None
+    accepts: Optional[tuple] = None
+    pos: Optional[int] = _field(default=None, repr=False)
+
+    @property
+    def has_value(self) -> bool:
+        return self.kind in ("field", "exposedField")
+
+    def __eq__(self, other):
+        from .scene import values_equal  # the equality of values lives with the scene graph
+        return (isinstance(other, FieldDecl) and (self.kind, self.type, self.name)
+                == (other.kind, other.type, other.name)
+                and values_equal(self.type, self.default, other.default))
+
+
+class Interface:
+    """Field lookup shared by built-in node types, PROTOs and EXTERNPROTOs."""
+
+    name: str
+    fields: dict
+    aliases: dict = {}
+
+    def field(self, name: str) -> Optional[FieldDecl]:
+        """The declaration of field ``name`` (or of an alias of it), or None."""
+        decl = self.fields.get(name)
+        if decl is None and name in self.aliases:
+            decl = self.fields.get(self.aliases[name])
+        return decl
+
+    def event(self, name: str) -> Optional[tuple]:
+        """(declaration, direction) for an event name; direction is "in" or "out".
+
+        An exposedField ``x`` answers to ``x``, ``set_x`` (in) and ``x_changed`` (out);
+        a plain ``x`` of an exposedField is returned with direction "inout".
+        """
+        decl = self.field(name)
+        if decl is not None:
+            return decl, {"eventIn": "in", "eventOut": "out", "field": "field",
+                          "exposedField": "inout"}[decl.kind]
+        if name.startswith("set_"):
+            decl = self.field(name[4:])
+            if decl is not None and decl.kind == "exposedField":
+                return decl, "in"
+        if name.endswith("_changed"):
+            decl = self.field(name[:-8])
+            if decl is not None and decl.kind == "exposedField":
+                return decl, "out"
+        return None
+
+    @property
+    def classes(self) -> Optional[frozenset]:
+        """Node classes of nodes of this type (None: unknown, fits anywhere)."""
+        return None
+
+
+class NodeType(Interface):
+    """A built-in node type: name, node classes, fields in spec order, aliases."""
+
+    def __init__(self, name: str, classes: frozenset, fields: dict, aliases: dict):
+        self.name = name
+        self._classes = classes
+        self.fields = fields
+        self.aliases = aliases
+
+    @property
+    def classes(self) -> frozenset:
+        return self._classes
+
+    def __repr__(self) -> str:
+        return f"<NodeType {self.name}>"
+
+
+def _load() -> dict:
+    from .reader import parse_value  # defaults are VRML text, read by the reader itself
+
+    text = resources.files(__package__).joinpath("data", "nodes.tsv").read_text("utf-8")
+    types: dict = {}
+    lines = text.splitlines()
+    for lineno, line in enumerate(lines[1:], start=2):
+        if not line.strip() or line.startswith("#"):
+            continue
+        node, kind, ftype, name, default, accepts = line.split("\t")
+        if kind == "node":
+            types[node] = NodeType(node, frozenset(ftype.split(",")), {}, {})
+        elif kind == "alias":
+            types[node].aliases[name] = default
+        else:
+            t = FIELD_TYPES[ftype]
+            value = parse_value(t, default, f"nodes.tsv:{lineno}") if default else t.empty()
+            acc = None if not accepts or accepts == "any" else tuple(accepts.split(","))
+            types[node].fields[name] = FieldDecl(kind, t, name, value, acc)
+    return types
+
+
+NODE_TYPES: dict[str, NodeType] = _load()
+
+#: The 54 standard nodes of VRML97 (the rest of NODE_TYPES are MPEG-4 face nodes).
+VRML97_NODES = frozenset(n for n in NODE_TYPES if n not in {
+    "Face", "FAP", "FDP", "FIT", "FaceDefTables", "FaceDefMesh", "FaceDefTransform",
+    "Viseme", "Expression"})

@@ -1,0 +1,92 @@
+"""The one error type of the VRML codec, and where in the text it points.
+
+Example
+-------
+>>> from mpeg4fba import vrml
+>>> try:
+...     vrml.loads("#VRML V2.0 utf8\\nTransform { scael 1 1 1 }")
+... except vrml.VRMLError as e:
+...     print(e.line, e.column)
+2 13
+"""
+from __future__ import annotations
+
+import bisect
+from typing import Iterable, Optional
+
+
+class VRMLError(ValueError):
+    """A syntax or meaning error in VRML text, or a value that can't be written.
+
+    ``path``, ``line`` and ``column`` (1-based, in characters) say where; ``message``
+    says what is wrong and ``expected`` (possibly empty) what would have been valid.
+    ``str(error)`` reads ``file:line:column: message (expected ...)``.
+    """
+
+    def __init__(self, message: str, path: Optional[str] = None, line: Optional[int] = None,
+                 column: Optional[int] = None, expected: Iterable[str] = ()):
+        self.message = message
+        self.path = path
+        self.line = line
+        self.column = column
+        self.expected = tuple(expected)
+        super().__init__(str(self))
+
+    def __str__(self) -> str:
+        where = self.path or "<string>"
+        if self.line is not None:
+            where += f":{self.line}"
+            if self.column is not None:
+                where += f":{self.column}"
+        text = f"{where}: {self.message}"
+        if self.expected:
+            text += " (expected " + _one_of(self.expected) + ")"
+        return text
+
+    def __reduce__(self):
+        return (VRMLError, (self.message, self.path, self.line, self.column, self.expected))
+
+
+def _one_of(items: tuple) -> str:
+    if len(items) == 1:
+        return items[0]
+    return "one of " + ", ".join(items)
+
+
+class Source:
+    """Text of one file (or string) with lazy offset -> line/column mapping.
+
+    Positions are kept as offsets while reading; lines are computed only when an
+    error or a user asks, so reading pays nothing for them.
+    """
+
+    __slots__ = ("text", "path", "_line_starts")
+
+    def __init__(self, text: str, path: Optional[str] = None):
+        self.text = text
+        self.path = path
+        self._line_starts = None
+
+    def _starts(self) -> list:
+        if self._line_starts is None:
+            starts = [0]
+            text = self.text
+            find = text.find
+            i = find("\n")
+            while i >= 0:
+                starts.append(i + 1)
+                i = find("\n", i + 1)
+            self._line_starts = starts
+        return self._line_starts
+
+    def line_column(self, offset: int) -> tuple[int, int]:
+        starts = self._starts()
+        offset = max(0, min(offset, len(self.text)))
+        i = bisect.bisect_right(starts, offset) - 1
+        return i + 1, offset - starts[i] + 1
+
+    def error(self, message: str, offset: Optional[int], expected: Iterable[str] = ()) -> VRMLError:
+        if offset is None:
+            return VRMLError(message, self.path, expected=expected)
+        line, column = self.line_column(offset)
+        return VRMLError(message, self.path, line, column, expected)

@@ -1,0 +1,462 @@
+"""VRML97 field types: the Python value of each, parsing from text and formatting to text.
+
+Values by type:
+
+========================  ====================================================
+SFBool                    ``bool``
+SFInt32                   ``int``
+SFFloat, SFTime           ``float``
+SFString                  ``str``
+SFVec2f/3f, SFColor,      ``tuple`` of floats (2, 3, 3, 4 long)
+SFRotation
+SFImage                   :class:`Image`
+SFNode                    a ``Node`` or ``None``
+MFInt32                   numpy ``int32`` array, shape (n,)
+MFFloat, MFTime           numpy ``float64`` array, shape (n,)
+MFVec2f/3f, MFColor,      numpy ``float64`` array, shape (n, 2/3/3/4)
+MFRotation
+MFString                  ``list`` of ``str``
+MFNode                    ``list`` of ``Node``
+========================  ====================================================
+
+Example
+-------
+>>> FIELD_TYPES["MFVec3f"].coerce([[0, 1, 2], [3, 4, 5]]).shape
+(2, 3)
+>>> format_floats(np.array([1.0, 0.1, -2.5e-7]))
+'1 0.1 -2.5e-07'
+"""
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass
+from typing import Any, Optional
+
+import numpy as np
+
+__all__ = ["FieldType", "FIELD_TYPES", "Image", "NumberError", "parse_numbers",
+           "format_floats", "format_float", "quote_string", "unquote_string"]
+
+_NUM = r"[+-]?(?:0[xX][0-9a-fA-F]+|(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?)"
+_NUMBER_RE = re.compile(_NUM)
+_SEPARATORS_RE = re.compile(r"(?:[\s,]+|#[^\n\r]*)*")
+_COMMENT_RE = re.compile(r"#[^\n\r]*")
+_NOT_INTEGER_RE = re.compile(r"[^\s,]*[.eE][^\s,]*")
+_CHUNK = 1 << 22  # characters converted per numpy call; bounds the temporary copies
+_INT32_MIN, _INT32_MAX = -(1 << 31), (1 << 31) - 1
+
+
+class NumberError(ValueError):
+    """A bad number at ``offset`` in the text; the reader turns it into a VRMLError."""
+
+    def __init__(self, message: str, offset: int):
+        super().__init__(message)
+        self.message = message
+        self.offset = offset
+
+
+def _locate_bad_number(text: str, start: int, end: int) -> int:
+    """Offset of the first thing in text[start:end] that is not a number or separator."""
+    pos = _SEPARATORS_RE.match(text, start, end).end()
+    while pos < end:
+        m = _NUMBER_RE.match(text, pos, end)
+        if m is None:
+            return pos
+        nxt = _SEPARATORS_RE.match(text, m.end(), end).end()
+        if nxt == m.end() and nxt < end:  # two numbers glued together, e.g. "1.2.3"
+            return nxt
+        pos = nxt
+    return end
+
+
+def _parse_slow(text: str, start: int, end: int, integer: bool) -> np.ndarray:
+    """Number by number: for hexadecimal values and for locating errors."""
+    values = []
+    pos = _SEPARATORS_RE.match(text, start, end).end()
+    while pos < end:
+        m = _NUMBER_RE.match(text, pos, end)
+        if m is None:
+            raise NumberError("not a number", pos)
+        tok = m.group()
+        if "x" in tok or "X" in tok:
+            values.append(int(tok, 16))
+        elif integer:
+            if _NOT_INTEGER_RE.fullmatch(tok):
+                raise NumberError(f"expected an integer, found {tok!r}", pos)
+            values.append(int(tok))
+        else:
+            values.append(float(tok))
+        pos = _SEPARATORS_RE.match(text, m.end(), end).end()
+    if integer:
+        return np.array(values, dtype=np.int64)
+    return np.array(values, dtype=np.float64)
+
+
+def _convert_chunk(chunk: str, base: int, text: str, start: int, end: int, integer: bool) -> np.ndarray:
+    if "#" in chunk:
+        chunk = _COMMENT_RE.sub(" ", chunk)
+    if "x" in chunk or "X" in chunk:
+        return _parse_slow(text, start, end, integer)
+    if integer:
+        bad = _NOT_INTEGER_RE.search(chunk)
+        if bad is not None:
+            off = _locate_bad_number(text, start, end)
+            if off < end:
+                raise NumberError("not a number", off)
+            # The offset in the chunk maps to the text because comments were replaced in place.
+            raise NumberError(f"expected an integer, found {bad.group()!r}", base + bad.start())
+    if "," in chunk:
+        chunk = chunk.replace(",", " ")
+    if not chunk.strip():
+        return np.empty(0)
+    try:
+        return np.fromstring(chunk, dtype=np.float64, sep=" ")
+    except ValueError:
+        raise NumberError("not a number", _locate_bad_number(text, start, end)) from None
+
+
+def parse_numbers(text: str, start: int = 0, end: Optional[int] = None, integer: bool = False) -> np.ndarray:
+    """All numbers in ``text[start:end]`` (separated by white space, commas, comments).
+
+    Converted by numpy in chunks of a few MB, so a 50 MB run costs one array and no
+    per-number Python work.  Hexadecimal integers (``0xFF``) are accepted.  With
+    ``integer=True`` the numbers must be written as integers; the result is then
+    int64, else float64.  Raises :class:`NumberError` with the offset of the culprit.
+
+    >>> parse_numbers("1, 2.5 # comment\\n -3e2").tolist()
+    [1.0, 2.5, -300.0]
+    """
+    if end is None:
+        end = len(text)
+    if end - start <= _CHUNK:
+        out = _convert_chunk(text[start:end], start, text, start, end, integer)
+    else:
+        # Split at line ends only, so a chunk never cuts a comment in two.
+        parts = []
+        pos = start
+        while pos < end:
+            cut = min(pos + _CHUNK, end)
+            if cut < end:
+                nl = text.find("\n", cut, end)
+                cut = end if nl < 0 else nl + 1
+            parts.append(_convert_chunk(text[pos:cut], pos, text, pos, cut, integer))
+            pos = cut
+        out = np.concatenate(parts) if len(parts) > 1 else parts[0]
+    if integer:
+        if out.dtype != np.int64:
+            out = out.astype(np.int64)
+    return out
+
+
+@dataclass(eq=False)
+class Image:
+    """An SFImage: ``width`` x ``height`` pixels of ``components`` bytes each (1-4).
+
+    ``pixels`` is a uint32 array of ``width * height`` packed pixel values, first row
+    at the bottom, as VRML97 stores them.
+    """
+
+    width: int
+    height: int
+    components: int
+    pixels: np.ndarray
+
+    def __post_init__(self):
+        self.pixels = np.asarray(self.pixels, dtype=np.uint32).reshape(-1)
+
+    def __eq__(self, other):
+        return (isinstance(other, Image) and (self.width, self.height, self.components)
+                == (other.width, other.height, other.components)
+                and np.array_equal(self.pixels, other.pixels))
+
+    def check(self) -> Optional[str]:
+        """What is wrong with this image, or None."""
+        if self.width < 0 or self.height < 0:
+            return "SFImage width and height must not be negative"
+        if not 0 <= self.components <= 4:
+            return f"SFImage components must be 0 to 4, not {self.components}"
+        if len(self.pixels) != self.width * self.height:
+            return (f"SFImage of {self.width}x{self.height} needs {self.width * self.height} "
+                    f"pixel values, found {len(self.pixels)}")
+        if self.components < 4 and len(self.pixels) and int(self.pixels.max()) >> (8 * self.components):
+            return f"SFImage pixel value too large for {self.components} component(s)"
+        return None
+
+
+# -- formatting -----------------------------------------------------------------------
+
+_TRAILING_ZERO_RE = re.compile(r"\.0(?=[ \n]|$)")
+
+
+def format_float(x: float) -> str:
+    """Shortest text that reads back to the same float (``1.0`` -> ``1``)."""
+    x = float(x)
+    if x != x or x in (float("inf"), float("-inf")):
+        raise ValueError(f"{x} can't be written in VRML97")
+    r = repr(x)
+    return r[:-2] if r.endswith(".0") else r
+
+
+def format_floats(values: np.ndarray, per_line: int = 0, indent: str = "") -> str:
+    """Numbers of a float array, shortest round-trip form, ``per_line`` to a line."""
+    flat = np.asarray(values, dtype=np.float64).reshape(-1)
+    if not np.isfinite(flat).all():
+        raise ValueError("NaN or infinity can't be written in VRML97")
+    items = list(map(repr, flat.tolist()))
+    return _join(items, per_line, indent, _TRAILING_ZERO_RE)
+
+
+def _join(items: list, per_line: int, indent: str, strip=None) -> str:
+    if per_line and len(items) > per_line:
+        sep = ",\n" + indent
+        text = sep.join(" ".join(items[i:i + per_line]) for i in range(0, len(items), per_line))
+    elif per_line:
+        text = " ".join(items)
+    else:
+        text = " ".join(items)
+    return strip.sub("", text) if strip is not None else text
+
+
+def quote_string(s: str) -> str:
+    """``s`` as an SFString literal: quotes and backslashes escaped."""
+    return '"' + s.replace("\\", "\\\\").replace('"', '\\"') + '"'
+
+
+_ESCAPE_RE = re.compile(r"\\(.)", re.S)
+
+
+def unquote_string(literal: str) -> str:
+    """The value of an SFString literal (with its quotes)."""
+    body = literal[1:-1]
+    if "\\" in body:
+        body = _ESCAPE_RE.sub(r"\1", body)
+    return body
+
+
+# -- the types --------------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class FieldType:
+    """One VRML97 field type, e.g. ``FIELD_TYPES["SFVec3f"]``.
+
+    ``kind`` is the value family (bool, int, float, string, node, image) and
+    ``width`` the number of numbers per value for numeric types.
+    """
+
+    name: str
+    kind: str
+    width: int
+    mf: bool
+
+    @property
+    def numeric(self) -> bool:
+        return self.kind in ("int", "float")
+
+    @property
+    def single(self) -> "FieldType":
+        """The SF type of the elements of an MF type (itself for SF types)."""
+        return FIELD_TYPES["SF" + self.name[2:]]
+
+    # -- Python values -> canonical values -----------------------------------------
+    def coerce(self, value: Any) -> Any:
+        """``value`` as this type's canonical Python value; ValueError if it can't be.
+
+        >>> FIELD_TYPES["SFRotation"].coerce([0, 1, 0, 1.5])
+        (0.0, 1.0, 0.0, 1.5)
+        """
+        k = self.kind
+        if self.mf:
+            if k == "node":
+                items = list(value)
+                for v in items:
+                    _check_node(v, allow_none=False)
+                return items
+            if k == "string":
+                if isinstance(value, str):
+                    return [value]
+                items = list(value)
+                if not all(isinstance(v, str) for v in items):
+                    raise ValueError(f"{self.name} takes strings")
+                return items
+            if k == "bool":
+                return [bool(v) for v in value]
+            arr = np.asarray(value, dtype=np.float64)
+            if arr.size == 0:
+                arr = arr.reshape((0, self.width) if self.width > 1 else (0,))
+            if self.width > 1:
+                if arr.ndim == 1 and arr.size % self.width == 0:
+                    arr = arr.reshape(-1, self.width)
+                if arr.ndim != 2 or arr.shape[1] != self.width:
+                    raise ValueError(f"{self.name} takes an array of shape (n, {self.width}), "
+                                     f"not {np.shape(value)}")
+            elif arr.ndim != 1:
+                arr = arr.reshape(-1)
+            if not np.isfinite(arr).all():
+                raise ValueError(f"{self.name} values must be finite")
+            if k == "int":
+                if not np.array_equal(arr, np.round(arr)) or (arr.size and (
+                        arr.min() < _INT32_MIN or arr.max() > _INT32_MAX)):
+                    raise ValueError(f"{self.name} takes 32-bit integers")
+                return arr.astype(np.int32)
+            return np.ascontiguousarray(arr)
+        if k == "node":
+            _check_node(value, allow_none=True)
+            return value
+        if k == "string":
+            if not isinstance(value, str):
+                raise ValueError(f"SFString takes a str, not {type(value).__name__}")
+            return value
+        if k == "bool":
+            if not isinstance(value, (bool, np.bool_)):
+                raise ValueError(f"SFBool takes True or False, not {value!r}")
+            return bool(value)
+        if k == "image":
+            if not isinstance(value, Image):
+                raise ValueError("SFImage takes an Image")
+            problem = value.check()
+            if problem:
+                raise ValueError(problem)
+            return value
+        if self.width > 1:
+            vals = tuple(float(v) for v in value)
+            if len(vals) != self.width:
+                raise ValueError(f"{self.name} takes {self.width} numbers, not {len(vals)}")
+            return vals
+        if k == "int":
+            if isinstance(value, (bool, np.bool_)) or int(value) != value:
+                raise ValueError(f"SFInt32 takes an integer, not {value!r}")
+            value = int(value)
+            if not _INT32_MIN <= value <= _INT32_MAX:
+                raise ValueError(f"{value} is outside the 32-bit range of SFInt32")
+            return value
+        return float(value)
+
+    def empty(self) -> Any:
+        """The empty MF value (or None for SFNode)."""
+        if not self.mf:
+            return None
+        if self.kind in ("node", "string", "bool"):
+            return []
+        if self.kind == "int":
+            return np.empty(0, dtype=np.int32)
+        return np.empty((0, self.width) if self.width > 1 else 0)
+
+    # -- numbers from text -> value -----------------------------------------------------
+    def from_numbers(self, numbers: np.ndarray, bracketed: bool) -> Any:
+        """The value of this (numeric or SFImage) type from a run of numbers.
+
+        Raises ValueError with a message saying how many numbers were expected.
+        """
+        n = len(numbers)
+        if self.kind == "image":
+            if n < 3:
+                raise ValueError("SFImage needs width, height and components first")
+            w, h, c = (int(v) for v in numbers[:3])
+            img = Image(w, h, c, np.zeros(0, np.uint32))
+            if (numbers[3:] < 0).any() or (numbers[3:] > 0xFFFFFFFF).any():
+                raise ValueError("SFImage pixel values must be 0 to 0xFFFFFFFF")
+            img.pixels = numbers[3:].astype(np.uint32)
+            problem = img.check()
+            if problem:
+                raise ValueError(problem)
+            return img
+        w = self.width
+        if not self.mf:
+            if n != w:
+                raise ValueError(f"{self.name} takes {w} number{'s' if w > 1 else ''}, found {n}")
+            if self.kind == "int":
+                v = int(numbers[0])
+                if not _INT32_MIN <= v <= _INT32_MAX:
+                    if 0 <= v <= 0xFFFFFFFF:  # hexadecimal written unsigned, e.g. 0xFFFFFFFF
+                        return v - (1 << 32)
+                    raise ValueError(f"{v} is outside the 32-bit range of SFInt32")
+                return v
+            if w == 1:
+                return float(numbers[0])
+            return tuple(numbers.tolist())
+        if not bracketed and n != w:
+            raise ValueError(f"{self.name} without brackets takes one value ({w} number"
+                             f"{'s' if w > 1 else ''}), found {n} numbers")
+        if n % w:
+            raise ValueError(f"{self.name} takes a multiple of {w} numbers, found {n}")
+        if self.kind == "int":
+            if n and (numbers.min() < _INT32_MIN or numbers.max() > 0xFFFFFFFF):
+                raise ValueError(f"{self.name} value outside the 32-bit range")
+            return numbers.astype(np.int64).astype(np.uint32).astype(np.int32) \
+                if n and numbers.max() > _INT32_MAX else numbers.astype(np.int32)
+        if w > 1:
+            return numbers.reshape(-1, w)
+        return numbers
+
+    # -- value -> text ----------------------------------------------------------------------
+    def format(self, value: Any, indent: str = "") -> str:
+        """Text of a non-node value.  ``indent`` is used for multi-line MF values."""
+        k = self.kind
+        if self.mf:
+            if k == "string":
+                if len(value) == 1:
+                    return quote_string(value[0])
+                return "[ " + " ".join(map(quote_string, value)) + " ]" if len(value) < 4 else \
+                    "[\n" + indent + "  " + (",\n" + indent + "  ").join(map(quote_string, value)) \
+                    + "\n" + indent + "]"
+            n = len(value)
+            if n == 0:
+                return "[]"
+            inner = indent + "  "
+            if k == "int":
+                items = list(map(str, np.asarray(value).tolist()))
+                text = _format_index_list(items, inner)
+            else:
+                text = format_floats(value, self.width if n > 1 else 0, inner)
+            if n == 1:
+                return text
+            if "\n" in text or len(text) > 60:
+                return "[\n" + inner + text + "\n" + indent + "]"
+            return "[ " + text + " ]"
+        if k == "bool":
+            return "TRUE" if value else "FALSE"
+        if k == "string":
+            return quote_string(value)
+        if k == "int":
+            return str(int(value))
+        if k == "image":
+            pixels = " ".join("0x%X" % p for p in value.pixels.tolist())
+            head = f"{value.width} {value.height} {value.components}"
+            return head + (" " + pixels if pixels else "")
+        if self.width == 1:
+            return format_float(value)
+        return " ".join(map(format_float, value))
+
+
+def _format_index_list(items: list, indent: str) -> str:
+    """Integers, a line per face (-1 ends a face) when they look like an index list."""
+    if "-1" in items[: 64] and len(items) > 8:
+        text = " ".join(items).replace(" -1 ", " -1,\n" + indent)
+        return text
+    if len(items) > 16:
+        return (",\n" + indent).join(" ".join(items[i:i + 16]) for i in range(0, len(items), 16))
+    return " ".join(items)
+
+
+def _check_node(v: Any, allow_none: bool) -> None:
+    from .scene import Node  # scene imports fields; import here to avoid the cycle
+    if v is None and allow_none:
+        return
+    if not isinstance(v, Node):
+        raise ValueError(f"expected a Node, not {type(v).__name__}")
+
+
+def _make_types() -> dict:
+    spec = {"Bool": ("bool", 1), "Int32": ("int", 1), "Float": ("float", 1), "Time": ("float", 1),
+            "String": ("string", 0), "Vec2f": ("float", 2), "Vec3f": ("float", 3),
+            "Color": ("float", 3), "Rotation": ("float", 4), "Node": ("node", 0),
+            "Image": ("image", 0)}
+    types = {}
+    for base, (kind, width) in spec.items():
+        types["SF" + base] = FieldType("SF" + base, kind, width, False)
+        if base not in ("Bool", "Image"):  # VRML97 has neither MFBool nor MFImage
+            types["MF" + base] = FieldType("MF" + base, kind, width, True)
+    return types
+
+
+FIELD_TYPES: dict[str, FieldType] = _make_types()

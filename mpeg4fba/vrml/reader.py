@@ -1,0 +1,812 @@
+"""VRML97 text -> Scene: ``load(path)`` and ``loads(text)``.
+
+The syntax is ``grammars/vrml97.lark``; lark's LALR parser drives it with the
+builder below passed in as its transformer, so no parse tree is ever built: each
+rule's callback types and checks what it reduces, knowing (through the ``*_head``
+rules) which node or PROTO it is in.  The lexer is ours but its terminals are the
+grammar's: it compiles them into one regular expression, adds nothing to them, and
+hands a bracketed run of numbers to numpy as one token.
+
+Example
+-------
+>>> scene = loads('#VRML V2.0 utf8\\nDEF T Transform { translation 0 1 0 }')
+>>> scene.find("T")["translation"]
+(0.0, 1.0, 0.0)
+"""
+from __future__ import annotations
+
+import difflib
+import gzip
+import os
+import re
+import threading
+import warnings
+import zlib
+from importlib import resources
+from pathlib import Path
+from typing import Any, Optional, Union
+
+import numpy as np
+from lark import Lark
+from lark.lexer import Lexer
+from lark.exceptions import UnexpectedInput, UnexpectedToken, VisitError
+
+from .errors import Source, VRMLError
+from .fields import FIELD_TYPES, FieldType, NumberError, parse_numbers, unquote_string
+
+__all__ = ["load", "loads", "parse_value", "VRMLWarning"]
+
+
+class VRMLWarning(UserWarning):
+    """Something the lenient reader kept although it is not VRML97."""
+
+
+_HEADER_RE = re.compile(r"#VRML[ \t]+V2\.0[ \t]+utf8")
+
+# Where a token may name its kind in an error message.
+_TOKEN_NAMES = {"ID": "a name", "NUMBERS": "a number", "STRING": "a string",
+                "TRUE": "TRUE", "FALSE": "FALSE", "NULL": "NULL",
+                "EVENT_KIND": "eventIn or eventOut", "FIELD_KIND": "field or exposedField",
+                "$END": "the end of the file"}
+_X3D_WORDS = {"IMPORT", "EXPORT", "COMPONENT", "PROFILE", "META", "UNIT", "AS",
+              "inputOnly", "outputOnly", "initializeOnly", "inputOutput"}
+
+
+def _grammar_text() -> str:
+    """The grammar, from the package (wheel) or from the source tree's grammars/."""
+    try:
+        return resources.files("mpeg4fba.grammars").joinpath("vrml97.lark").read_text("utf-8")
+    except (ModuleNotFoundError, FileNotFoundError, OSError):
+        here = Path(__file__).resolve().parents[2] / "grammars" / "vrml97.lark"
+        return here.read_text("utf-8")
+
+
+# -- the lexer ------------------------------------------------------------------------
+
+class _Tok:
+    """A token: far cheaper to make than lark's Token, and all the parser reads."""
+
+    __slots__ = ("type", "value", "start_pos", "end_pos")
+    line = column = end_line = end_column = None
+
+    def __init__(self, type: str, value: str, start_pos: int, end_pos: int):
+        self.type = type
+        self.value = value
+        self.start_pos = start_pos
+        self.end_pos = end_pos
+
+    def __str__(self) -> str:
+        return self.value
+
+    def __repr__(self) -> str:
+        return f"_Tok({self.type}, {self.value!r})"
+
+
+class _FastLexer(Lexer):
+    """Lexer built from the grammar's own terminals (lark custom-lexer interface 0)."""
+
+    __future_interface__ = 0
+    current_source: Optional[Source] = None
+
+    def __init__(self, lexer_conf):
+        terms = {t.name: t for t in lexer_conf.terminals}
+        rx = {name: t.pattern.to_regexp() for name, t in terms.items()}
+        id_re = re.compile(rx["ID"])
+        self.punct = {}
+        self.word_terminals = []
+        for t in lexer_conf.terminals:
+            if t.name in ("ID", "NUMBERS", "STRING") or t.name in lexer_conf.ignore:
+                continue
+            if t.pattern.type == "str" and not id_re.fullmatch(t.pattern.value):
+                self.punct[t.pattern.value] = t.name
+            else:
+                self.word_terminals.append((t.name, re.compile(rx[t.name])))
+        skip = "|".join(rx[n] for n in lexer_conf.ignore)
+        punct = "|".join(re.escape(p) for p in sorted(self.punct, key=len, reverse=True))
+        self.skip_re = re.compile(f"(?:{skip})*")
+        self.master = re.compile(
+            f"(?:{skip})*(?:(?P<ID>{rx['ID']})|(?P<NUMBERS>{rx['NUMBERS']})|(?P<STRING>{rx['STRING']})"
+            f"|(?P<P>{punct}))", re.S)
+        gi = self.master.groupindex
+        self.groups = (gi["ID"], gi["NUMBERS"], gi["STRING"], gi["P"])
+        # A bracketed run of plain numbers: checked with one character class, the
+        # cheapest scan there is, then given to numpy whole.
+        self.run_re = re.compile(r"[0-9eE+\-.,\s]*")
+        self.words: dict = {}
+
+    def word_type(self, word: str) -> str:
+        for name, rx in self.word_terminals:
+            if rx.fullmatch(word):
+                break
+        else:
+            name = "ID"
+        if len(self.words) < 100_000:
+            self.words[word] = name
+        return name
+
+    def lex(self, text: str):
+        match = self.master.match
+        run_match = self.run_re.match
+        words = self.words
+        punct = self.punct
+        tok = _Tok
+        g_id, g_num, g_str, g_p = self.groups
+        pos = 0
+        while True:
+            m = match(text, pos)
+            if m is None:
+                break
+            i = m.lastindex
+            start = m.start(i)
+            pos = m.end()
+            if i == g_id:
+                v = m.group(i)
+                yield tok(words.get(v) or self.word_type(v), v, start, pos)
+            elif i == g_num:
+                yield tok("NUMBERS", "", start, pos)
+            elif i == g_str:
+                yield tok("STRING", m.group(i), start, pos)
+            else:
+                v = m.group(i)
+                yield tok(punct[v], v, start, pos)
+                if v == "[":
+                    r = run_match(text, pos)
+                    end = r.end()
+                    if end - pos > 16 and text[end:end + 1] == "]":
+                        stripped = self.skip_re.match(text, pos).end()
+                        if stripped < end:
+                            yield tok("NUMBERS", "", stripped, end)
+                        pos = end
+        end = self.skip_re.match(text, pos).end()
+        if end < len(text):
+            src = self.current_source
+            c = text[end]
+            if c == '"':
+                raise src.error("string not closed: a '\"' has no closing quote", end)
+            raise src.error(f"unexpected character {c!r}", end)
+
+
+# -- building the scene -----------------------------------------------------------------
+
+class _MF(list):
+    """The items of a bracketed value, with the offset of its '['."""
+
+    __slots__ = ("pos",)
+
+
+class _Scope:
+    """File or PROTO-body scope: its PROTO types and DEF names."""
+
+    __slots__ = ("parent", "proto", "protos", "defs")
+
+    def __init__(self, parent: Optional["_Scope"], proto):
+        self.parent = parent
+        self.proto = proto
+        self.protos: dict = {}
+        self.defs: dict = {}
+
+    def lookup_type(self, name: str):
+        s = self
+        while s is not None:
+            t = s.protos.get(name)
+            if t is not None:
+                return t
+            s = s.parent
+        return None
+
+
+_IS_RULES = {  # node side kind -> PROTO interface kinds it may be bound to (VRML97 4.8.3)
+    "inout": ("exposedField", "field", "eventIn", "eventOut"),
+    "field": ("field",),
+    "in": ("eventIn",),
+    "out": ("eventOut",),
+}
+
+
+def _kind_text(ftype: FieldType) -> str:
+    k = ftype.kind
+    if k == "node":
+        return "a node" if not ftype.mf else "nodes"
+    if k == "string":
+        return "a string" if not ftype.mf else "strings"
+    if k == "bool":
+        return "TRUE or FALSE"
+    if k == "image":
+        return "width, height, components and pixels"
+    n = ftype.width
+    what = ("integer" if k == "int" else "number") + ("s" if n > 1 else "")
+    return (f"{n} {what}" if n > 1 else f"an {what}" if k == "int" else f"a {what}") + \
+        (" per value" if ftype.mf else "")
+
+
+class _Builder:
+    """The transformer: one method per grammar rule, called as lark reduces it."""
+
+    Node = Proto = ExternProto = Route = Scene = RawValue = type("_Unbound", (), {})
+
+    def __init__(self):
+        self.bound = False
+        self.reset(Source(""), True)
+
+    def bind(self) -> None:
+        """Import the scene graph and catalogue (not at import: they need parse_value)."""
+        from .catalogue import NODE_TYPES
+        from .scene import ExternProto, Node, Proto, RawValue, Route, Scene
+        self.NODE_TYPES = NODE_TYPES
+        self.SCRIPT = NODE_TYPES["Script"]
+        self.Node, self.Proto, self.ExternProto = Node, Proto, ExternProto
+        self.Route, self.Scene, self.RawValue = Route, Scene, RawValue
+        self.bound = True
+
+    def reset(self, source: Source, strict: bool) -> None:
+        self.src = source
+        self.text = source.text
+        self.strict = strict
+        self.scope = _Scope(None, None)
+        self.frames: list = []
+        self.warned: set = set()
+
+    # -- helpers --------------------------------------------------------------------------
+    def err(self, message: str, pos: Optional[int], expected=()) -> VRMLError:
+        return self.src.error(message, pos, expected)
+
+    def warn(self, key: str, message: str, pos: int) -> None:
+        if key in self.warned:
+            return
+        self.warned.add(key)
+        e = self.src.error(message, pos)
+        warnings.warn(str(e), VRMLWarning, stacklevel=2)
+
+    def pos_of(self, value) -> Optional[int]:
+        if isinstance(value, _Tok):
+            return value.start_pos
+        if isinstance(value, self.Node):
+            return value._pos
+        return getattr(value, "pos", None)
+
+    def numbers(self, tok: _Tok, integer: bool) -> np.ndarray:
+        try:
+            return parse_numbers(self.text, tok.start_pos, tok.end_pos, integer)
+        except NumberError as e:
+            raise self.err(e.message, e.offset) from None
+
+    def check_class(self, node, d, where: str, pos: int) -> None:
+        accepts = d.accepts
+        if accepts is None or node.decl is None:
+            return
+        classes = node.classes
+        if classes is None or classes & set(accepts):
+            return
+        raise self.err(f"a {node.type} node can't go in {where}",
+                       pos, [f"a{'n' if accepts[0][0] in 'aeiou' else ''} {accepts[0]} node"
+                             if len(accepts) == 1 else f"one of these node kinds: {', '.join(accepts)}"])
+
+    def convert(self, d, value, where: str) -> Any:
+        """The typed value of declaration ``d`` from what the grammar gave."""
+        ftype = d.type
+        kind = ftype.kind
+        if isinstance(value, _Tok):
+            t = value.type
+            if t == "NUMBERS" and (kind in ("int", "float", "image")):
+                text = self.text
+                start, end = value.start_pos, value.end_pos
+                if end - start < 96 and not ftype.mf and kind == "float":
+                    # Small SF values (translation 1 2 3): plain Python beats a numpy call.
+                    s = text[start:end]
+                    if "#" not in s and "x" not in s and "X" not in s:
+                        parts = s.replace(",", " ").split()
+                        if len(parts) == ftype.width:
+                            vals = [float(p) for p in parts]
+                            return vals[0] if ftype.width == 1 else tuple(vals)
+                nums = self.numbers(value, kind != "float")
+                try:
+                    return ftype.from_numbers(nums, False)
+                except ValueError as e:
+                    raise self.err(f"{where}: {e}", start) from None
+            if t == "STRING" and kind == "string":
+                s = unquote_string(value.value)
+                return [s] if ftype.mf else s
+            if (t == "TRUE" or t == "FALSE") and kind == "bool" and not ftype.mf:
+                return t == "TRUE"
+            if t == "NULL" and kind == "node" and not ftype.mf:
+                return None
+            found = {"NUMBERS": "numbers", "STRING": "a string", "TRUE": "TRUE",
+                     "FALSE": "FALSE", "NULL": "NULL"}.get(t, repr(value.value))
+            raise self.err(f"{where} is {ftype.name}: found {found}", value.start_pos,
+                           [_kind_text(ftype)])
+        if isinstance(value, self.Node):
+            if kind == "node":
+                self.check_class(value, d, where, value._pos)
+                return [value] if ftype.mf else value
+            raise self.err(f"{where} is {ftype.name}: found a {value.type} node", value._pos,
+                           [_kind_text(ftype)])
+        # a bracketed list
+        if not ftype.mf:
+            raise self.err(f"{where} is {ftype.name}, a single value: brackets are for MF fields",
+                           value.pos, [_kind_text(ftype)])
+        if not value:
+            return ftype.empty()
+        if kind == "node":
+            for item in value:
+                if not isinstance(item, self.Node):
+                    raise self.err(f"{where} is MFNode: found {self.describe(item)}",
+                                   self.pos_of(item), ["nodes"])
+                self.check_class(item, d, where, item._pos)
+            return list(value)
+        if kind == "string":
+            out = []
+            for item in value:
+                if not (isinstance(item, _Tok) and item.type == "STRING"):
+                    raise self.err(f"{where} is MFString: found {self.describe(item)}",
+                                   self.pos_of(item), ["strings"])
+                out.append(unquote_string(item.value))
+            return out
+        arrays = []
+        for item in value:
+            if not (isinstance(item, _Tok) and item.type == "NUMBERS"):
+                raise self.err(f"{where} is {ftype.name}: found {self.describe(item)}",
+                               self.pos_of(item), [_kind_text(ftype)])
+            arrays.append(self.numbers(item, kind == "int"))
+        nums = arrays[0] if len(arrays) == 1 else np.concatenate(arrays)
+        try:
+            return ftype.from_numbers(nums, True)
+        except ValueError as e:
+            raise self.err(f"{where}: {e}", value.pos) from None
+
+    def describe(self, item) -> str:
+        if isinstance(item, self.Node):
+            return f"a {item.type} node"
+        return {"NUMBERS": "numbers", "STRING": "a string", "TRUE": "TRUE",
+                "FALSE": "FALSE"}.get(item.type, repr(item.value))
+
+    def raw(self, value) -> Any:
+        """A value kept as written, for fields the reader does not know."""
+        def item(x):
+            if isinstance(x, _Tok):
+                if x.type == "NUMBERS":
+                    return self.text[x.start_pos:x.end_pos]
+                return x.value
+            return x
+        if isinstance(value, _MF):
+            return self.RawValue([item(x) for x in value], True)
+        return self.RawValue([item(value)], False)
+
+    def unknown_field(self, node, name: str, pos: int) -> VRMLError:
+        names = list(node.decl.fields) + [d.name for d in node.interface]
+        close = difflib.get_close_matches(name, names, n=3)
+        return self.err(f"{node.type} has no field {name!r}", pos,
+                        [repr(c) for c in close] if close else ())
+
+    def node_event(self, node, name: str):
+        for d in node.interface:
+            if d.name == name:
+                return d, {"eventIn": "in", "eventOut": "out", "field": "field",
+                           "exposedField": "inout"}[d.kind]
+        return node.decl.event(name)
+
+    # -- rules ----------------------------------------------------------------------------
+    def start(self, items):
+        statements = [s for s in items if s is not None]
+        for s in statements:
+            if isinstance(s, self.Node) and s.decl is not None:
+                classes = s.classes
+                if classes is not None and "child" not in classes:
+                    raise self.err(f"a {s.type} node can't be a root node of a file", s._pos,
+                                   ["a grouping, shape, sensor, light, interpolator, bindable "
+                                    "or Script node"])
+        return self.Scene(statements)
+
+    def node_head(self, items):
+        tok = items[0]
+        name = tok.value
+        decl = self.scope.lookup_type(name) or self.NODE_TYPES.get(name)
+        if decl is None:
+            if name in _X3D_WORDS:
+                raise self.err(f"{name} is X3D, not VRML97", tok.start_pos)
+            if self.strict:
+                close = difflib.get_close_matches(
+                    name, list(self.NODE_TYPES) + self.visible_protos(), n=3)
+                raise self.err(f"unknown node type {name!r}", tok.start_pos,
+                               [repr(c) for c in close] if close else ())
+            self.warn("node:" + name, f"{name} is not a VRML97 node type; kept as a generic node",
+                      tok.start_pos)
+        node = self.Node._raw(name, decl, self.src, tok.start_pos)
+        self.frames.append(node)
+        return node
+
+    def visible_protos(self) -> list:
+        out, s = [], self.scope
+        while s is not None:
+            out.extend(s.protos)
+            s = s.parent
+        return out
+
+    def node(self, items):
+        node = items[0]
+        self.frames.pop()
+        for s in items[1:]:
+            if s is not None:
+                node.statements.append(s)
+        return node
+
+    def field(self, items):
+        tok, value = items
+        node = self.frames[-1]
+        name = tok.value
+        if node.decl is None:
+            node.fields[name] = self.raw(value)
+            return None
+        d = node.field_decl(name)
+        if d is None:
+            if self.strict:
+                raise self.unknown_field(node, name, tok.start_pos)
+            self.warn(f"field:{node.type}.{name}",
+                      f"{node.type} has no field {name!r}; kept as written", tok.start_pos)
+            node.fields[name] = self.raw(value)
+            return None
+        if d.kind != "field" and d.kind != "exposedField":
+            raise self.err(f"{node.type}.{name} is an {d.kind}: it can't be given a value",
+                           tok.start_pos, ["a field or exposedField"])
+        node.fields[d.name] = self.convert(d, value, f"{node.type}.{name}")
+        return None
+
+    def is_field(self, items):
+        tok, _, ptok = items
+        node = self.frames[-1]
+        proto = self.scope.proto
+        if proto is None:
+            raise self.err("IS is only allowed inside a PROTO body", tok.start_pos)
+        pd = proto.fields.get(ptok.value)
+        if pd is None:
+            close = difflib.get_close_matches(ptok.value, list(proto.fields), n=3)
+            raise self.err(f"PROTO {proto.name} has no field {ptok.value!r} to bind with IS",
+                           ptok.start_pos, [repr(c) for c in close])
+        if node.decl is not None:
+            ev = self.node_event(node, tok.value)
+            if ev is None:
+                raise self.unknown_field(node, tok.value, tok.start_pos)
+            self.check_is(node, tok, ev, pd, ptok)
+        node.is_map[tok.value] = ptok.value
+        return None
+
+    def check_is(self, node, tok, ev, pd, ptok) -> None:
+        d, direction = ev
+        if d.type is not pd.type:
+            raise self.err(f"{node.type}.{tok.value} is {d.type.name} but PROTO field "
+                           f"{pd.name} is {pd.type.name}", ptok.start_pos, [d.type.name])
+        if pd.kind not in _IS_RULES[direction]:
+            raise self.err(f"{node.type}.{tok.value} ({d.kind}) can't be bound with IS to "
+                           f"{pd.kind} {pd.name}", ptok.start_pos,
+                           [" or ".join(_IS_RULES[direction])])
+
+    def decl_common(self, kind_tok, type_tok, name_tok):
+        ftype = FIELD_TYPES.get(type_tok.value)
+        if ftype is None:
+            close = difflib.get_close_matches(type_tok.value, list(FIELD_TYPES), n=3)
+            raise self.err(f"unknown field type {type_tok.value!r}", type_tok.start_pos,
+                           [repr(c) for c in close] or ["a VRML97 field type"])
+        from .catalogue import FieldDecl
+        target = self.frames[-1]
+        d = FieldDecl(kind_tok.value, ftype, name_tok.value, ftype.empty(), None,
+                      kind_tok.start_pos)
+        if isinstance(target, self.Node):
+            if target.decl is not self.SCRIPT and target.decl is not None:
+                raise self.err(f"interface declarations are only allowed in Script nodes, "
+                               f"not in {target.type}", kind_tok.start_pos)
+            if d.kind == "exposedField":
+                raise self.err("a Script can't have an exposedField in VRML97",
+                               kind_tok.start_pos, ["eventIn, eventOut or field"])
+            if target.field_decl(d.name) is not None:
+                raise self.err(f"Script already has a field or event named {d.name!r}",
+                               name_tok.start_pos)
+            target.interface.append(d)
+        else:
+            if d.name in target.fields:
+                raise self.err(f"{target.name} already declares {d.name!r}", name_tok.start_pos)
+            target.fields[d.name] = d
+        return d, target
+
+    def event_decl(self, items):
+        self.decl_common(*items)
+        return None
+
+    def field_decl(self, items):
+        kind_tok, type_tok, name_tok, value = items
+        d, target = self.decl_common(kind_tok, type_tok, name_tok)
+        d.default = self.convert(d, value, f"{target.name if not isinstance(target, self.Node) else target.type}.{d.name}")
+        return None
+
+    def is_decl(self, items):
+        kind_tok, type_tok, name_tok, _, ptok = items
+        d, node = self.decl_common(kind_tok, type_tok, name_tok)
+        proto = self.scope.proto
+        if proto is None:
+            raise self.err("IS is only allowed inside a PROTO body", name_tok.start_pos)
+        pd = proto.fields.get(ptok.value)
+        if pd is None:
+            raise self.err(f"PROTO {proto.name} has no field {ptok.value!r} to bind with IS",
+                           ptok.start_pos, [repr(c) for c in proto.fields])
+        direction = {"eventIn": "in", "eventOut": "out", "field": "field"}[d.kind]
+        self.check_is(node, name_tok, (d, direction), pd, ptok)
+        node.is_map[d.name] = pd.name
+        return None
+
+    def extern_decl(self, items):
+        kind_tok, type_tok, name_tok = items
+        self.decl_common(kind_tok, type_tok, name_tok)
+        return None
+
+    def mfvalue(self, items):
+        out = _MF(items[1:])
+        out.pos = items[0].start_pos
+        return out
+
+    def def_head(self, items):
+        return items[0]
+
+    def def_node(self, items):
+        tok, node = items
+        if node.name is not None and node.name != tok.value:
+            raise self.err("a node can have only one DEF name", tok.start_pos)
+        node.name = tok.value
+        self.scope.defs[tok.value] = node
+        return node
+
+    def use_node(self, items):
+        tok = items[0]
+        node = self.scope.defs.get(tok.value)
+        if node is None:
+            close = difflib.get_close_matches(tok.value, list(self.scope.defs), n=3)
+            where = " in this PROTO body" if self.scope.proto is not None else ""
+            raise self.err(f"USE {tok.value}: no node was DEF'd as {tok.value!r} before{where}",
+                           tok.start_pos, [repr(c) for c in close])
+        return node
+
+    def route(self, items):
+        fn, ff, _, tn, tf = items
+        ends = []
+        for ntok, ftok, want in ((fn, ff, "out"), (tn, tf, "in")):
+            node = self.scope.defs.get(ntok.value)
+            if node is None:
+                raise self.err(f"ROUTE names {ntok.value!r}, which no DEF before it defines",
+                               ntok.start_pos, [repr(c) for c in difflib.get_close_matches(
+                                   ntok.value, list(self.scope.defs), n=3)])
+            ev = None
+            if node.decl is not None:
+                ev = self.node_event(node, ftok.value)
+                if ev is None:
+                    raise self.err(f"{node.type} {ntok.value} has no event {ftok.value!r}",
+                                   ftok.start_pos)
+                d, direction = ev
+                if direction != want and direction != "inout":
+                    word = "eventOut" if want == "out" else "eventIn"
+                    raise self.err(f"ROUTE {'from' if want == 'out' else 'to'} "
+                                   f"{ntok.value}.{ftok.value}, which is an {d.kind}",
+                                   ftok.start_pos, [f"an {word} or exposedField"])
+            ends.append((node, ev))
+        (a, ea), (b, eb) = ends
+        if ea is not None and eb is not None and ea[0].type is not eb[0].type:
+            raise self.err(f"ROUTE from {ea[0].type.name} {fn.value}.{ff.value} to "
+                           f"{eb[0].type.name} {tn.value}.{tf.value}: the types differ",
+                           tf.start_pos, [ea[0].type.name])
+        r = self.Route(a, ff.value, b, tf.value)
+        r._source, r._pos = self.src, fn.start_pos
+        return r
+
+    def proto_head(self, items):
+        tok = items[0]
+        p = self.Proto(tok.value)
+        p._source, p._pos = self.src, tok.start_pos
+        self.frames.append(p)
+        return p
+
+    def proto_body_start(self, items):
+        proto = self.frames.pop()
+        self.scope = _Scope(self.scope, proto)
+        return None
+
+    def proto(self, items):
+        proto = items[0]
+        proto.body = [s for s in items[1:] if s is not None]
+        self.scope = self.scope.parent
+        if not any(isinstance(s, self.Node) for s in proto.body):
+            raise self.err(f"PROTO {proto.name} has no node in its body", proto._pos,
+                           ["at least one node"])
+        self.scope.protos[proto.name] = proto
+        return proto
+
+    def externproto_head(self, items):
+        tok = items[0]
+        p = self.ExternProto(tok.value)
+        p._source, p._pos = self.src, tok.start_pos
+        self.frames.append(p)
+        return p
+
+    def externproto(self, items):
+        proto = items[0]
+        urls = items[-1]
+        self.frames.pop()
+        if isinstance(urls, _Tok):
+            proto.urls = [unquote_string(urls.value)]
+        else:
+            bad = [u for u in urls if not (isinstance(u, _Tok) and u.type == "STRING")]
+            if bad:
+                raise self.err("EXTERNPROTO URLs must be strings", self.pos_of(bad[0]),
+                               ["a string"])
+            proto.urls = [unquote_string(u.value) for u in urls]
+        self.scope.protos[proto.name] = proto
+        return proto
+
+
+# -- the parser -------------------------------------------------------------------------
+
+_lock = threading.RLock()
+_parser: Optional[Lark] = None
+_builder: Optional[_Builder] = None
+
+
+def _get_parser():
+    global _parser, _builder
+    if _parser is None:
+        _builder = _Builder()
+        _parser = Lark(_grammar_text(), parser="lalr", lexer=_FastLexer, transformer=_builder,
+                       maybe_placeholders=False)
+    return _parser, _builder
+
+
+def _syntax_error(src: Source, e: UnexpectedInput) -> VRMLError:
+    tok = getattr(e, "token", None)
+    expected = sorted(getattr(e, "expected", ()) or ())
+    names = []
+    for t in expected:
+        n = _TOKEN_NAMES.get(t)
+        if n is None:
+            lit = _literal_of(t)
+            n = repr(lit) if lit else t
+        if n not in names:
+            names.append(n)
+    if tok is None or tok.type == "$END":
+        return src.error("unexpected end of file", len(src.text), names)
+    pos = tok.start_pos
+    if tok.type == "NUMBERS":
+        what = "number " + repr(src.text[pos:tok.end_pos][:20])
+    elif tok.type == "ID":
+        what = f"name {tok.value!r}"
+    else:
+        what = repr(tok.value)
+    prev = re.findall(r"[^\s\[\]{}.,#\"']+", src.text[max(0, pos - 64):pos])
+    if prev and prev[-1] in _X3D_WORDS:
+        return src.error(f"{prev[-1]} is X3D, not VRML97", pos - len(prev[-1]) - 1)
+    return src.error(f"unexpected {what}", pos, names)
+
+
+def _literal_of(terminal: str) -> Optional[str]:
+    parser, _ = _get_parser()
+    for t in parser.terminals:
+        if t.name == terminal and t.pattern.type == "str":
+            return t.pattern.value
+    return None
+
+
+def loads(text: str, strict: bool = True, path: Optional[str] = None,
+          require_header: bool = True):
+    """Read VRML97 text into a :class:`Scene`.
+
+    ``strict=False`` keeps nodes and fields that are not VRML97 as generic ones (with a
+    :class:`VRMLWarning` once per kind) instead of rejecting them.  Raises
+    :class:`VRMLError` with the line and column of the first problem.
+
+    >>> len(loads("#VRML V2.0 utf8\\nGroup { children [ Shape {} Shape {} ] }").nodes)
+    1
+    """
+    if text.startswith("\ufeff"):
+        text = text[1:]
+    src = Source(text, str(path) if path is not None else None)
+    if require_header:
+        if not _HEADER_RE.match(text):
+            first = text.split("\n", 1)[0][:40].rstrip("\r")
+            if first.startswith("#VRML V1.0"):
+                raise src.error("VRML 1.0 is not supported; this reader reads VRML97 (V2.0)", 0)
+            if first.startswith("#X3D"):
+                raise src.error("this is X3D classic encoding, not VRML97", 0)
+            raise src.error(f"missing VRML97 header, found {first!r}", 0, ["'#VRML V2.0 utf8'"])
+    with _lock:
+        parser, builder = _get_parser()
+        if not builder.bound:
+            builder.bind()
+        builder.reset(src, strict)
+        _FastLexer.current_source = src
+        try:
+            scene = parser.parse(text)
+        except VRMLError:
+            raise
+        except VisitError as e:  # lark wraps errors raised in callbacks on some paths
+            if isinstance(e.orig_exc, VRMLError):
+                raise e.orig_exc from None
+            raise
+        except UnexpectedInput as e:
+            raise _syntax_error(src, e) from None
+        finally:
+            builder.reset(Source(""), True)
+            _FastLexer.current_source = None
+    scene.path = src.path
+    return scene
+
+
+def _decode(data: bytes, path: Optional[str]) -> str:
+    if data.startswith(b"\xef\xbb\xbf"):
+        data = data[3:]
+    try:
+        return data.decode("utf-8")
+    except UnicodeDecodeError as e:
+        line = data.count(b"\n", 0, e.start) + 1
+        line_start = data.rfind(b"\n", 0, e.start) + 1
+        column = len(data[line_start:e.start].decode("utf-8", "replace")) + 1
+        raise VRMLError(f"invalid UTF-8 (byte 0x{data[e.start]:02X}); VRML97 files are UTF-8",
+                        path, line, column) from None
+
+
+def read_bytes(path: Union[str, os.PathLike]) -> bytes:
+    """The bytes of a VRML file, gunzipped when they start with gzip's magic bytes."""
+    p = str(path)
+    try:
+        with open(p, "rb") as f:
+            data = f.read()
+    except OSError as e:
+        raise VRMLError(f"can't read the file: {e.strerror}", p) from None
+    if data[:2] == b"\x1f\x8b":
+        try:
+            data = gzip.decompress(data)
+        except (OSError, EOFError, zlib.error) as e:
+            raise VRMLError(f"corrupt or truncated gzip data: {e}", p) from None
+    return data
+
+
+def load(path: Union[str, os.PathLike], strict: bool = True):
+    """Read a VRML97 file (plain or gzip-compressed, by its magic bytes) into a Scene.
+
+    >>> import tempfile, os
+    >>> p = os.path.join(tempfile.mkdtemp(), "a.wrl")
+    >>> _ = open(p, "w").write("#VRML V2.0 utf8\\nShape { geometry Box {} }")
+    >>> load(p).nodes[0].type
+    'Shape'
+    """
+    data = read_bytes(path)
+    text = _decode(data, str(path))
+    del data  # the text is all we need from here: halves peak memory on big files
+    return loads(text, strict=strict, path=str(path))
+
+
+def parse_value(ftype: FieldType, text: str, where: str = "value") -> Any:
+    """One field value of type ``ftype`` from its VRML text (no nodes), e.g. defaults.
+
+    >>> parse_value(FIELD_TYPES["MFString"], '[ "WALK" "ANY" ]')
+    ['WALK', 'ANY']
+    """
+    from .catalogue import FieldDecl
+    parser, builder = _get_parser()
+    lexer = _FastLexer(parser.lexer_conf)
+    src = Source(text, where)
+    with _lock:
+        _FastLexer.current_source = src
+        try:
+            toks = list(lexer.lex(text))
+        finally:
+            _FastLexer.current_source = None
+        if not toks:
+            raise src.error("empty value", 0, [_kind_text(ftype)])
+        if toks[0].type == "LSQB":
+            if toks[-1].type != "RSQB":
+                raise src.error("'[' not closed", len(text), ["']'"])
+            value = _MF(toks[1:-1])
+            value.pos = 0
+        else:
+            if len(toks) != 1:
+                raise src.error("one value expected", toks[1].start_pos)
+            value = toks[0]
+        old = builder.src, builder.text
+        builder.src, builder.text = src, text
+        try:
+            return builder.convert(FieldDecl("field", ftype, where), value, where)
+        finally:
+            builder.src, builder.text = old

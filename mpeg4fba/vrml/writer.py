@@ -1,0 +1,268 @@
+"""Scene -> VRML97 text: ``dumps(scene)`` and ``dump(scene, path)``.
+
+Canonical output: two-space indentation, one field per line, explicit fields only,
+DEF at a shared node's first place and USE after, floats in the shortest form that
+reads back to the same float64.  The writer is a loop over a work stack, not a
+recursion, so any depth of nesting writes; indentation stops growing at 40 levels
+so that deep files stay linear in size.
+
+Example
+-------
+>>> from mpeg4fba.vrml import Node, Scene, dumps
+>>> print(dumps(Scene([Node("Transform", translation=(0, 1.5, 0))])), end="")
+#VRML V2.0 utf8
+<BLANKLINE>
+Transform {
+  translation 0 1.5 0
+}
+"""
+from __future__ import annotations
+
+import gzip
+import os
+import tempfile
+from typing import Union
+
+from .errors import VRMLError
+from .fields import FieldType, quote_string
+from .scene import ExternProto, Node, Proto, RawValue, Route, Scene
+
+__all__ = ["dump", "dumps"]
+
+HEADER = "#VRML V2.0 utf8\n"
+_MAX_INDENT = 40
+
+
+def _indent(level: int) -> str:
+    return "  " * min(level, _MAX_INDENT)
+
+
+class _Writer:
+    def __init__(self):
+        self.out: list = []
+        self.names: dict = {}     # id(node) -> name used for DEF/USE
+        self.written: set = set()  # ids of nodes already written (in this scope)
+        self.bound: dict = {}      # DEF name -> id(node) it refers to now
+
+    # -- naming ---------------------------------------------------------------------------
+    def plan_names(self, statements: list) -> None:
+        """Give a DEF name to every node used twice or named by a ROUTE and unnamed."""
+        count: dict = {}
+        routed: set = set()
+        nodes: dict = {}
+        taken: set = set()
+        stack = [s for s in reversed(statements)]
+        while stack:
+            s = stack.pop()
+            if isinstance(s, Route):
+                routed.add(id(s.from_node))
+                routed.add(id(s.to_node))
+                nodes[id(s.from_node)] = s.from_node
+                nodes[id(s.to_node)] = s.to_node
+                continue
+            if not isinstance(s, Node):
+                continue  # PROTO bodies are planned when written, in their own scope
+            k = id(s)
+            count[k] = count.get(k, 0) + 1
+            if count[k] > 1:
+                continue
+            nodes[k] = s
+            if s.name:
+                taken.add(s.name)
+            stack.extend(reversed(s.statements))
+            stack.extend(reversed(s.children_nodes()))
+        serial = 0
+        for k, n in nodes.items():
+            if n.name:
+                self.names[k] = n.name
+            elif count.get(k, 0) > 1 or k in routed:
+                serial += 1
+                while f"_{serial}" in taken:
+                    serial += 1
+                self.names[k] = f"_{serial}"
+
+    # -- output ---------------------------------------------------------------------------
+    def run(self, ops: list) -> None:
+        out = self.out
+        stack = list(reversed(ops))
+        while stack:
+            op = stack.pop()
+            if type(op) is str:
+                out.append(op)
+                continue
+            kind = op[0]
+            if kind == "node":
+                more = self.node(op[1], op[2])
+            elif kind == "stmt":
+                more = self.statement(op[1], op[2])
+            else:  # "call": run a bookkeeping function in document order
+                op[1]()
+                continue
+            stack.extend(reversed(more))
+
+    def statement(self, s, level: int) -> list:
+        ind = _indent(level)
+        if isinstance(s, Node):
+            return [ind, ("node", s, level), "\n"]
+        if isinstance(s, Route):
+            return [ind + f"ROUTE {self.name_of(s.from_node)}.{s.from_field} TO "
+                    f"{self.name_of(s.to_node)}.{s.to_field}\n"]
+        if isinstance(s, Proto):
+            return self.proto(s, level)
+        if isinstance(s, ExternProto):
+            ops = [ind + f"EXTERNPROTO {s.name} [\n"]
+            for d in s.fields.values():
+                ops.append(_indent(level + 1) + f"{d.kind} {d.type.name} {d.name}\n")
+            urls = s.urls
+            ops.append(ind + "] " + (quote_string(urls[0]) if len(urls) == 1 else
+                                     "[ " + " ".join(map(quote_string, urls)) + " ]") + "\n")
+            return ops
+        raise VRMLError(f"can't write a {type(s).__name__} as a VRML statement")
+
+    def name_of(self, node: Node) -> str:
+        name = self.names.get(id(node))
+        if name is None:
+            raise VRMLError(f"a ROUTE names a {node.type} node that is not in the scene")
+        return name
+
+    def proto(self, p: Proto, level: int) -> list:
+        ind, ind1 = _indent(level), _indent(level + 1)
+        ops = [ind + f"PROTO {p.name} [\n"]
+        for d in p.fields.values():
+            head = ind1 + f"{d.kind} {d.type.name} {d.name}"
+            if d.has_value:
+                ops.append(head + " ")
+                ops.extend(self.value(d.type, d.default, level + 1))
+                ops.append("\n")
+            else:
+                ops.append(head + "\n")
+        ops.append(ind + "]\n" + ind + "{\n")
+        saved = (self.names, self.written, self.bound)
+
+        def enter():
+            self.names, self.written, self.bound = {}, set(), {}
+            self.plan_names(p.body)
+
+        def leave():
+            self.names, self.written, self.bound = saved
+
+        ops.append(("call", enter))
+        for s in p.body:
+            ops.append(("stmt", s, level + 1))
+        ops.append(("call", leave))
+        ops.append(ind + "}\n")
+        return ops
+
+    def node(self, node: Node, level: int) -> list:
+        k = id(node)
+        name = self.names.get(k)
+        if k in self.written:
+            if self.bound.get(name) != k:
+                raise VRMLError(f"can't write USE {name}: a later node took the DEF name {name!r}; "
+                                f"rename one of them")
+            return [f"USE {name}"]
+        self.written.add(k)
+        head = (f"DEF {name} " if name else "") + node.type + " {"
+        if name:
+            self.bound[name] = k
+        if not (node.fields or node.interface or node.is_map or node.statements):
+            return [head + " }"]
+        ind = _indent(level + 1)
+        ops = [head + "\n"]
+        interface_names = set()
+        for d in node.interface:
+            interface_names.add(d.name)
+            line = ind + f"{d.kind} {d.type.name} {d.name}"
+            if d.name in node.is_map:
+                ops.append(line + f" IS {node.is_map[d.name]}\n")
+            elif d.has_value:
+                ops.append(line + " ")
+                ops.extend(self.value(d.type, d.default, level + 1))
+                ops.append("\n")
+            else:
+                ops.append(line + "\n")
+        for fname, value in node.fields.items():
+            ops.append(ind + fname + " ")
+            if isinstance(value, RawValue):
+                ops.extend(self.raw(value, level + 1))
+            else:
+                d = node.field_decl(fname)
+                ops.extend(self.value(d.type, value, level + 1))
+            ops.append("\n")
+        for fname, pname in node.is_map.items():
+            if fname not in interface_names:
+                ops.append(ind + f"{fname} IS {pname}\n")
+        for s in node.statements:
+            ops.append(("stmt", s, level + 1))
+        ops.append(_indent(level) + "}")
+        return ops
+
+    def value(self, ftype: FieldType, value, level: int) -> list:
+        if ftype.kind != "node":
+            try:
+                return [ftype.format(value, _indent(level))]
+            except ValueError as e:
+                raise VRMLError(f"can't write a {ftype.name} value: {e}") from None
+        if not ftype.mf:
+            return ["NULL"] if value is None else [("node", value, level)]
+        if not value:
+            return ["[]"]
+        if len(value) == 1:
+            return [("node", value[0], level)]
+        ind = _indent(level + 1)
+        ops = ["[\n"]
+        for n in value:
+            ops.extend([ind, ("node", n, level + 1), "\n"])
+        ops.append(_indent(level) + "]")
+        return ops
+
+    def raw(self, value: RawValue, level: int) -> list:
+        ops: list = []
+        for i, item in enumerate(value.items):
+            if i:
+                ops.append(" ")
+            ops.append(("node", item, level + 1) if isinstance(item, Node) else item)
+        if value.bracketed:
+            return ["[ "] + ops + [" ]"]
+        return ops
+
+
+def dumps(scene: Scene) -> str:
+    """The VRML97 text of ``scene``.  Raises VRMLError for values VRML97 can't hold."""
+    w = _Writer()
+    w.plan_names(scene.statements)
+    ops: list = []
+    for s in scene.statements:
+        ops.append(("stmt", s, 0))
+    w.run(ops)
+    return HEADER + "\n" + "".join(w.out)
+
+
+def dump(scene: Scene, path: Union[str, os.PathLike]) -> None:
+    """Write ``scene`` to ``path``, gzip-compressed when it ends in ``.gz`` or ``.wrz``.
+
+    The file is written to a temporary name beside it and renamed, so a failure never
+    leaves a half-written file.
+    """
+    text = dumps(scene)
+    path = os.fspath(path)
+    data = text.encode("utf-8")
+    if path.endswith((".gz", ".wrz")):
+        data = gzip.compress(data, compresslevel=6, mtime=0)
+    atomic_write(path, data)
+
+
+def atomic_write(path: str, data: bytes) -> None:
+    """Write ``data`` to ``path`` through a temporary file and a rename."""
+    folder = os.path.dirname(os.path.abspath(path))
+    fd, tmp = tempfile.mkstemp(prefix=".tmp-", suffix=os.path.basename(path), dir=folder)
+    try:
+        with os.fdopen(fd, "wb") as f:
+            f.write(data)
+        os.replace(tmp, path)
+    except BaseException:
+        try:
+            os.unlink(tmp)
+        except OSError:
+            pass
+        raise

@@ -39,6 +39,7 @@ class FieldDecl:
     default: Any = None
     accepts: Optional[tuple] = None
     pos: Optional[int] = _field(default=None, repr=False)
+    origin: Optional[str] = None   # "X3D" for fields X3D added to a VRML97 node
 
     @property
     def has_value(self) -> bool:
@@ -57,6 +58,7 @@ class Interface:
     name: str
     fields: dict
     aliases: dict = {}
+    alias_origin: dict = {}
 
     def field(self, name: str) -> Optional[FieldDecl]:
         """The declaration of field ``name`` (or of an alias of it), or None."""
@@ -99,6 +101,7 @@ class NodeType(Interface):
         self._classes = classes
         self.fields = fields
         self.aliases = aliases
+        self.alias_origin: dict = {}
 
     @property
     def classes(self) -> frozenset:
@@ -117,16 +120,18 @@ def _load() -> dict:
     for lineno, line in enumerate(lines[1:], start=2):
         if not line.strip() or line.startswith("#"):
             continue
-        node, kind, ftype, name, default, accepts = line.split("\t")
+        node, kind, ftype, name, default, accepts, origin = line.split("\t")
         if kind == "node":
             types[node] = NodeType(node, frozenset(ftype.split(",")), {}, {})
         elif kind == "alias":
             types[node].aliases[name] = default
+            if origin:
+                types[node].alias_origin[name] = origin
         else:
             t = FIELD_TYPES[ftype]
             value = parse_value(t, default, f"nodes.tsv:{lineno}") if default else t.empty()
             acc = None if not accepts or accepts == "any" else tuple(accepts.split(","))
-            types[node].fields[name] = FieldDecl(kind, t, name, value, acc)
+            types[node].fields[name] = FieldDecl(kind, t, name, value, acc, origin=origin or None)
     return types
 
 

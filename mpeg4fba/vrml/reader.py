@@ -154,13 +154,19 @@ class _FastLexer(Lexer):
                     end = r.end()
                     if end - pos > 16 and text[end:end + 1] == "]":
                         stripped = self.skip_re.match(text, pos).end()
-                        if stripped < end:
-                            yield tok("NUMBERS", "", stripped, end)
+                        last = end
+                        while last > stripped and text[last - 1] in " \t\r\n,":
+                            last -= 1
+                        if stripped < last:
+                            yield tok("NUMBERS", "", stripped, last)
                         pos = end
         end = self.skip_re.match(text, pos).end()
         if end < len(text):
             src = self.current_source
             c = text[end]
+            if "\udc80" <= c <= "\udcff":
+                raise src.error(f"invalid UTF-8 (byte 0x{ord(c) - 0xDC00:02X}); VRML97 files "
+                                "are UTF-8", end)
             if c == '"':
                 raise src.error("string not closed: a '\"' has no closing quote", end)
             raise src.error(f"unexpected character {c!r}", end)
@@ -245,6 +251,8 @@ class _Builder:
         self.scope = _Scope(None, None)
         self.frames: list = []
         self.warned: set = set()
+        self.pending_def = None
+        self.open_defs: set = set()   # ids of DEF'd nodes whose bodies are being read
 
     # -- helpers --------------------------------------------------------------------------
     def err(self, message: str, pos: Optional[int], expected=()) -> VRMLError:
@@ -281,7 +289,7 @@ class _Builder:
                        pos, [f"a{'n' if accepts[0][0] in 'aeiou' else ''} {accepts[0]} node"
                              if len(accepts) == 1 else f"one of these node kinds: {', '.join(accepts)}"])
 
-    def convert(self, d, value, where: str) -> Any:
+    def convert(self, d, value, where: str, extra_ok: bool = False) -> Any:
         """The typed value of declaration ``d`` from what the grammar gave."""
         ftype = d.type
         kind = ftype.kind
@@ -299,6 +307,12 @@ class _Builder:
                             vals = [float(p) for p in parts]
                             return vals[0] if ftype.width == 1 else tuple(vals)
                 nums = self.numbers(value, kind != "float")
+                if extra_ok and not ftype.mf and kind != "image" and len(nums) > ftype.width:
+                    # Seen in the wild: "field SFInt32 x 0 0 0".  The first value is
+                    # unambiguous; the rest is dropped with a warning, not an error.
+                    self.warn(f"extra:{where}", f"{where} is {ftype.name}: {len(nums)} numbers "
+                              f"given, the first {ftype.width} kept", start)
+                    nums = nums[:ftype.width]
                 try:
                     return ftype.from_numbers(nums, False)
                 except ValueError as e:
@@ -391,9 +405,12 @@ class _Builder:
             if isinstance(s, self.Node) and s.decl is not None:
                 classes = s.classes
                 if classes is not None and "child" not in classes:
-                    raise self.err(f"a {s.type} node can't be a root node of a file", s._pos,
-                                   ["a grouping, shape, sensor, light, interpolator, bindable "
-                                    "or Script node"])
+                    message = f"a {s.type} node can't be a root node of a file"
+                    if self.strict:
+                        raise self.err(message, s._pos, [
+                            "a grouping, shape, sensor, light, interpolator, bindable or "
+                            "Script node"])
+                    self.warn("root:" + s.type, message + "; kept", s._pos)
         return self.Scene(statements)
 
     def node_head(self, items):
@@ -411,6 +428,11 @@ class _Builder:
             self.warn("node:" + name, f"{name} is not a VRML97 node type; kept as a generic node",
                       tok.start_pos)
         node = self.Node._raw(name, decl, self.src, tok.start_pos)
+        if self.pending_def is not None:
+            node.name = self.pending_def.value
+            self.scope.defs[node.name] = node
+            self.open_defs.add(id(node))
+            self.pending_def = None
         self.frames.append(node)
         return node
 
@@ -447,6 +469,10 @@ class _Builder:
         if d.kind != "field" and d.kind != "exposedField":
             raise self.err(f"{node.type}.{name} is an {d.kind}: it can't be given a value",
                            tok.start_pos, ["a field or exposedField"])
+        if d.origin is not None or (d.name != name and name in node.decl.alias_origin):
+            self.warn(f"x3d:{node.type}.{name}", f"{node.type}.{name} is an X3D field, not "
+                      "VRML97; accepted" + (f" as {d.name}" if d.name != name else ""),
+                      tok.start_pos)
         node.fields[d.name] = self.convert(d, value, f"{node.type}.{name}")
         return None
 
@@ -496,7 +522,14 @@ class _Builder:
             if d.kind == "exposedField":
                 raise self.err("a Script can't have an exposedField in VRML97",
                                kind_tok.start_pos, ["eventIn, eventOut or field"])
-            if target.field_decl(d.name) is not None:
+            old = target.field_decl(d.name)
+            if old is not None:
+                if old in target.interface and (old.kind, old.type) == (d.kind, d.type) \
+                        and not d.has_value:
+                    # Seen in the wild: the same event declared twice.  Harmless; keep one.
+                    self.warn(f"dup:{d.name}", f"Script declares {d.kind} {d.name} twice; "
+                              "the repeat is ignored", name_tok.start_pos)
+                    return old, None
                 raise self.err(f"Script already has a field or event named {d.name!r}",
                                name_tok.start_pos)
             target.interface.append(d)
@@ -513,12 +546,16 @@ class _Builder:
     def field_decl(self, items):
         kind_tok, type_tok, name_tok, value = items
         d, target = self.decl_common(kind_tok, type_tok, name_tok)
-        d.default = self.convert(d, value, f"{target.name if not isinstance(target, self.Node) else target.type}.{d.name}")
+        owner = target.type if isinstance(target, self.Node) else target.name
+        d.default = self.convert(d, value, f"{owner}.{d.name}", extra_ok=True)
         return None
 
     def is_decl(self, items):
         kind_tok, type_tok, name_tok, _, ptok = items
         d, node = self.decl_common(kind_tok, type_tok, name_tok)
+        if node is None:
+            raise self.err(f"Script already has a field or event named {d.name!r}",
+                           name_tok.start_pos)
         proto = self.scope.proto
         if proto is None:
             raise self.err("IS is only allowed inside a PROTO body", name_tok.start_pos)
@@ -542,14 +579,14 @@ class _Builder:
         return out
 
     def def_head(self, items):
+        # Reduced before the node's type is read: node_head binds the name at once, so
+        # that a USE inside the node's own body is recognised as a cycle.
+        self.pending_def = items[0]
         return items[0]
 
     def def_node(self, items):
         tok, node = items
-        if node.name is not None and node.name != tok.value:
-            raise self.err("a node can have only one DEF name", tok.start_pos)
-        node.name = tok.value
-        self.scope.defs[tok.value] = node
+        self.open_defs.discard(id(node))
         return node
 
     def use_node(self, items):
@@ -560,6 +597,11 @@ class _Builder:
             where = " in this PROTO body" if self.scope.proto is not None else ""
             raise self.err(f"USE {tok.value}: no node was DEF'd as {tok.value!r} before{where}",
                            tok.start_pos, [repr(c) for c in close])
+        if id(node) in self.open_defs:
+            message = f"USE {tok.value} inside the node DEF'd as {tok.value} makes it its own ancestor"
+            if self.strict:
+                raise self.err(message, tok.start_pos)
+            self.warn("cycle:" + tok.value, message + "; kept", tok.start_pos)
         return node
 
     def route(self, items):
@@ -734,16 +776,24 @@ def loads(text: str, strict: bool = True, path: Optional[str] = None,
 
 
 def _decode(data: bytes, path: Optional[str]) -> str:
+    """UTF-8 text of a file.  Invalid bytes inside strings and comments are kept
+    byte-exactly (as surrogate escapes, written back unchanged) with a warning, since
+    files in the wild put Latin-1 or Shift-JIS there; anywhere else they are an error.
+    """
     if data.startswith(b"\xef\xbb\xbf"):
         data = data[3:]
     try:
         return data.decode("utf-8")
     except UnicodeDecodeError as e:
-        line = data.count(b"\n", 0, e.start) + 1
-        line_start = data.rfind(b"\n", 0, e.start) + 1
-        column = len(data[line_start:e.start].decode("utf-8", "replace")) + 1
-        raise VRMLError(f"invalid UTF-8 (byte 0x{data[e.start]:02X}); VRML97 files are UTF-8",
-                        path, line, column) from None
+        first = e.start
+    text = data.decode("utf-8", "surrogateescape")
+    line = data.count(b"\n", 0, first) + 1
+    line_start = data.rfind(b"\n", 0, first) + 1
+    column = len(data[line_start:first].decode("utf-8", "replace")) + 1
+    warnings.warn(str(VRMLError(f"invalid UTF-8 (byte 0x{data[first]:02X}); bytes that are not "
+                                "UTF-8 are kept as they are", path, line, column)),
+                  VRMLWarning, stacklevel=3)
+    return text
 
 
 def read_bytes(path: Union[str, os.PathLike]) -> bytes:

@@ -246,7 +246,7 @@ def dump(scene: Scene, path: Union[str, os.PathLike]) -> None:
     """
     text = dumps(scene)
     path = os.fspath(path)
-    data = text.encode("utf-8")
+    data = text.encode("utf-8", "surrogateescape")  # invalid bytes read in go back as they were
     if path.endswith((".gz", ".wrz")):
         data = gzip.compress(data, compresslevel=6, mtime=0)
     atomic_write(path, data)

@@ -19,6 +19,7 @@ import difflib
 import gzip
 import os
 import re
+import sys
 import threading
 import warnings
 import zlib
@@ -97,10 +98,11 @@ class _FastLexer(Lexer):
         for t in lexer_conf.terminals:
             if t.name in ("ID", "NUMBERS", "STRING") or t.name in lexer_conf.ignore:
                 continue
+            name = sys.intern(str(t.name))  # identical objects make the table lookups cheap
             if t.pattern.type == "str" and not id_re.fullmatch(t.pattern.value):
-                self.punct[t.pattern.value] = t.name
+                self.punct[t.pattern.value] = name
             else:
-                self.word_terminals.append((t.name, re.compile(rx[t.name])))
+                self.word_terminals.append((name, re.compile(rx[t.name])))
         skip = "|".join(rx[n] for n in lexer_conf.ignore)
         punct = "|".join(re.escape(p) for p in sorted(self.punct, key=len, reverse=True))
         self.skip_re = re.compile(f"(?:{skip})*")
@@ -119,7 +121,7 @@ class _FastLexer(Lexer):
             if rx.fullmatch(word):
                 break
         else:
-            name = "ID"
+            name = sys.intern("ID")
         if len(self.words) < 100_000:
             self.words[word] = name
         return name
@@ -690,10 +692,83 @@ _builder: Optional[_Builder] = None
 def _get_parser():
     global _parser, _builder
     if _parser is None:
-        _builder = _Builder()
-        _parser = Lark(_grammar_text(), parser="lalr", lexer=_FastLexer, transformer=_builder,
-                       maybe_placeholders=False)
+        builder = _Builder()
+        parser = Lark(_grammar_text(), parser="lalr", lexer=_FastLexer, transformer=builder,
+                      maybe_placeholders=False)
+        _direct_callbacks(parser, builder)
+        _parser, _builder = parser, builder
     return _parser, _builder
+
+
+class _Splice(list):
+    """Children of an inlined repetition (lark's ``x*``), spliced into the parent."""
+
+    __slots__ = ()
+
+
+def _direct_callbacks(parser: Lark, builder: _Builder) -> None:
+    """Give lark's LALR loop plain callbacks, precomputed per rule.
+
+    lark wraps each rule's callback in generic child filters and builds a Tree for
+    every inlined rule; here each rule gets a closure that picks its children by
+    precomputed positions, and the parse table is keyed by interned strings so that
+    its lookups never fall back to Python-level ``__eq__``.  Same results, about half
+    the time per token.  If lark's internals ever differ, lark's own callbacks stay.
+    """
+    try:
+        inner = parser.parser.parser.parser
+        table = inner.parse_table
+        rules = list(inner.callbacks)
+    except AttributeError:
+        return
+    intern = sys.intern
+    table.states = {state: {intern(str(k)): v for k, v in actions.items()}
+                    for state, actions in table.states.items()}
+    callbacks = {}
+    for rule in rules:
+        if not hasattr(rule, "origin"):
+            continue
+        rule.origin.name = name = intern(str(rule.origin.name))
+        expansion = rule.expansion
+        plan = []
+        for i, sym in enumerate(expansion):
+            if sym.is_term:
+                if not getattr(sym, "filter_out", False):
+                    plan.append((i, False))
+            else:
+                plan.append((i, str(sym.name).startswith("__")))
+        callbacks[rule] = _make_callback(name, expansion, plan, builder)
+    inner.callbacks = callbacks
+
+
+def _make_callback(name: str, expansion, plan: list, builder: _Builder):
+    if name.startswith("__"):  # a repetition: x | self x
+        if expansion and expansion[0].name == name:
+            def grow(children):
+                acc = children[0]
+                acc.extend(children[1:])
+                return acc
+            return grow
+        return _Splice
+    if name.startswith("_"):  # an inlined alternative: pass its one child through
+        index = plan[0][0] if plan else 0
+        return lambda children: children[index]
+    method = getattr(builder, name)
+    if all(not splice for _, splice in plan):
+        indices = [i for i, _ in plan]
+        if indices == list(range(len(expansion))):
+            return method
+        return lambda children: method([children[i] for i in indices])
+
+    def call(children):
+        items = []
+        for i, splice in plan:
+            if splice:
+                items.extend(children[i])
+            else:
+                items.append(children[i])
+        return method(items)
+    return call
 
 
 def _syntax_error(src: Source, e: UnexpectedInput) -> VRMLError:

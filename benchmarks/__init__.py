@@ -1,0 +1,1 @@
+"""Benchmarks of mpeg4fba; ``benchmarks.generate`` makes deterministic test scenes."""

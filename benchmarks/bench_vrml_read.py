@@ -1,0 +1,323 @@
+#!/usr/bin/env python
+"""Read/write speed and memory of the VRML97 codec (``mpeg4fba.vrml``).
+
+    python benchmarks/bench_vrml_read.py [--quick] [--no-peer] [--profile] [--ifs-mb N]
+
+Cases (see benchmarks/README.md):
+
+1. read Choreonoid ``WAIST.wrl`` from the shared corpus (3 MB, one big mesh);
+2. read a generated ~50 MB ``IndexedFaceSet`` file, and the peak memory of doing so
+   in a fresh subprocess, as a multiple of the numeric payload (numbers x 8 bytes);
+3. read a generated scene of 4,096 ``Transform/Shape/Appearance/Material/Box`` nodes;
+4. write (``dumps``) the scenes of cases 1 and 3.
+
+Each timing is ``time.perf_counter`` around one call, after one warm-up call, best of
+3 (best of 1 with ``--quick``).  Reads time ``load(path)`` (the file read and UTF-8
+decode included); the peer, PyVRML97, is timed on ``open(path).read()`` plus its
+parser's ``parse(text)``, in the same process, if it can be imported.  MB = 10**6
+bytes.  A markdown table for the README is printed at the end.
+"""
+from __future__ import annotations
+
+import argparse
+import cProfile
+import gc
+import io
+import json
+import os
+import platform
+import pstats
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+REPO = Path(__file__).resolve().parents[1]
+if str(REPO) not in sys.path:
+    sys.path.insert(0, str(REPO))  # benchmark this working tree, not an installed copy
+
+import numpy as np  # noqa: E402
+
+from benchmarks import generate  # noqa: E402
+from mpeg4fba import vrml as mvrml  # noqa: E402
+
+MB = 1e6
+WAIST = "data/vrml-corpus/choreonoid+choreonoid/share/model/RIC30/parts/WAIST.wrl"
+
+
+def shared_dir() -> Path:
+    """``$MPEG4FBA_SHARED``, else ``<repo>/../shared`` (may not exist)."""
+    env = os.environ.get("MPEG4FBA_SHARED")
+    return Path(env) if env else REPO.parent / "shared"
+
+
+def best_of(fn, reps: int):
+    """``(best seconds, last result)``: one warm-up call, then ``reps`` timed ones."""
+    result = fn()
+    best = float("inf")
+    for _ in range(reps):
+        result = None
+        gc.collect()
+        t0 = time.perf_counter()
+        result = fn()
+        best = min(best, time.perf_counter() - t0)
+    return best, result
+
+
+# -- the peer ------------------------------------------------------------------------------
+
+def load_peer():
+    """``(parse(path), label)`` for PyVRML97, or ``(None, reason)``."""
+    try:
+        from importlib.metadata import version
+        from vrml.vrml97 import parser as vparser  # PyVRML97 (needs simpleparse)
+        p = vparser.buildParser()
+        label = f"PyVRML97 {version('PyVRML97')}"
+    except Exception as e:  # ImportError, or simpleparse failing to build its tables
+        return None, f"PyVRML97 unavailable ({type(e).__name__}: {e}); no peer ratios"
+
+    def parse(path):
+        with open(path, encoding="utf-8", errors="surrogateescape") as f:
+            text = f.read()
+        ok, children, end = p.parse(text)
+        if not ok or end != len(text):
+            raise RuntimeError(f"PyVRML97 stopped at offset {end} of {len(text)}")
+        return children
+
+    return parse, label
+
+
+# -- memory (a fresh subprocess per measurement) --------------------------------------------
+
+_MEM_CHILD = r"""
+import gc, json, resource, sys
+sys.path.insert(0, sys.argv[1])
+from mpeg4fba import vrml
+path, mode = sys.argv[2], sys.argv[3]
+# Build the (lazily made) parser now, so the baseline holds it and the imports.
+vrml.loads("#VRML V2.0 utf8\nShape { geometry IndexedFaceSet { coord Coordinate "
+           "{ point [ 0 0 0, 1 0 0, 0 1 0 ] } coordIndex [ 0, 1, 2, -1 ] } }")
+gc.collect()
+def rss_now_kb():
+    try:
+        with open("/proc/self/statm") as f:
+            return int(f.read().split()[1]) * resource.getpagesize() // 1024
+    except OSError:
+        return None
+out = {}
+if mode == "rss":
+    out["maxrss_before_kb"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+    out["rss_before_kb"] = rss_now_kb()
+    scene = vrml.load(path)
+    out["maxrss_after_kb"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+    gc.collect()
+    out["rss_retained_kb"] = rss_now_kb()
+else:
+    import tracemalloc
+    tracemalloc.start()
+    scene = vrml.load(path)
+    out["traced_current"], out["traced_peak"] = tracemalloc.get_traced_memory()
+print(json.dumps(out))
+"""
+
+
+def measure_memory(path: Path, payload: int) -> dict:
+    """Peak memory of ``load(path)`` in fresh interpreters, over a post-import baseline."""
+    res = {}
+    for mode in ("rss", "tracemalloc"):
+        proc = subprocess.run([sys.executable, "-c", _MEM_CHILD, str(REPO), str(path), mode],
+                              capture_output=True, text=True)
+        if proc.returncode != 0:
+            raise RuntimeError(f"memory subprocess ({mode}) failed:\n{proc.stderr[-2000:]}")
+        res.update(json.loads(proc.stdout.strip().splitlines()[-1]))
+    # Baseline: the current RSS after imports (ru_maxrss before the load can sit a
+    # little above it if the imports peaked); fall back to ru_maxrss where there is no
+    # /proc.
+    base_kb = res["rss_before_kb"] or res["maxrss_before_kb"]
+    res["rss_increase"] = (res["maxrss_after_kb"] - base_kb) * 1024
+    res["rss_increase_maxrss_base"] = (res["maxrss_after_kb"] - res["maxrss_before_kb"]) * 1024
+    res["payload"] = payload
+    return res
+
+
+# -- reporting -----------------------------------------------------------------------------
+
+class Results:
+    def __init__(self):
+        self.rows = []  # dicts for the final table
+
+    def speed(self, case, nbytes, seconds, target=None, peer=None, note=""):
+        """One timed case: print its line now and keep it for the table."""
+        mbps = nbytes / MB / seconds
+        line = f"{case:<40} {nbytes / MB:8.2f} MB {seconds:9.4f} s {mbps:8.2f} MB/s"
+        if target is not None:
+            line += f"   target >= {target:g} MB/s: {'met' if mbps >= target else 'MISSED'}"
+        peer_txt = ratio_txt = "-"
+        if isinstance(peer, tuple):
+            label, psec = peer
+            pmbps = nbytes / MB / psec
+            ratio = mbps / pmbps
+            line += f"   | {label}: {psec:.4f} s {pmbps:.2f} MB/s, ours/theirs {ratio:.1f}x"
+            peer_txt, ratio_txt = f"{pmbps:.2f} MB/s", f"{ratio:.1f}x"
+        elif isinstance(peer, str):
+            line += f"   | peer: {peer}"
+            peer_txt = peer
+        if note:
+            line += f"   ({note})"
+        print(line, flush=True)
+        self.rows.append({"case": case, "size": f"{nbytes / MB:.2f}", "time": f"{seconds:.4f}",
+                          "result": f"{mbps:.1f} MB/s",
+                          "target": f">= {target:g} MB/s" if target is not None else "-",
+                          "met": ("yes" if mbps >= target else "**no**") if target is not None
+                          else "-",
+                          "peer": peer_txt, "ratio": ratio_txt, "mbps": mbps,
+                          "target_value": target})
+
+    def skip(self, case, reason):
+        print(f"{case:<40} SKIPPED: {reason}", flush=True)
+        self.rows.append({"case": case, "size": "-", "time": "-", "result": f"skipped: {reason}",
+                          "target": "-", "met": "-", "peer": "-", "ratio": "-"})
+
+    def other(self, case, nbytes, result, target, met):
+        self.rows.append({"case": case, "size": f"{nbytes / MB:.2f}", "time": "-",
+                          "result": result, "target": target,
+                          "met": "yes" if met else "**no**", "peer": "-", "ratio": "-"})
+
+    def table(self, peer_label) -> str:
+        head = ["Case", "Size (MB)", "Best time (s)", "Result", "Target", "Met",
+                f"{peer_label or 'Peer'}", "Ours / peer"]
+        keys = ["case", "size", "time", "result", "target", "met", "peer", "ratio"]
+        lines = ["| " + " | ".join(head) + " |", "|" + "|".join("---" for _ in head) + "|"]
+        for r in self.rows:
+            lines.append("| " + " | ".join(str(r[k]) for k in keys) + " |")
+        return "\n".join(lines)
+
+
+def profile_top(fn, n=10) -> str:
+    """The top ``n`` functions of one call of ``fn`` by cumulative time."""
+    prof = cProfile.Profile()
+    prof.enable()
+    fn()
+    prof.disable()
+    s = io.StringIO()
+    pstats.Stats(prof, stream=s).sort_stats("cumulative").print_stats(n)
+    return s.getvalue()
+
+
+# -- main ------------------------------------------------------------------------------------
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--quick", action="store_true", help="best of 1 instead of best of 3")
+    ap.add_argument("--no-peer", action="store_true", help="do not try PyVRML97")
+    ap.add_argument("--profile", action="store_true",
+                    help="cProfile the read cases that miss their target (top 10 cumulative)")
+    ap.add_argument("--ifs-mb", type=float, default=50.0,
+                    help="size of the generated IndexedFaceSet file in MB (default 50)")
+    args = ap.parse_args(argv)
+    reps = 1 if args.quick else 3
+
+    import lark
+    print(f"# mpeg4fba.vrml benchmarks: Python {platform.python_version()}, numpy "
+          f"{np.__version__}, lark {lark.__version__}, {platform.machine()}, "
+          f"best of {reps} after 1 warm-up")
+
+    if args.no_peer:
+        peer, peer_label = None, "peer disabled (--no-peer)"
+    else:
+        peer, peer_label = load_peer()
+    if peer is None:
+        print(f"# {peer_label}")
+        peer_note, peer_label = peer_label, None
+    else:
+        print(f"# peer: {peer_label} (vrml.vrml97.parser.buildParser().parse(text))")
+
+    res = Results()
+    to_profile = []  # (case, fn) that missed their target
+    scenes = {}
+
+    def read_case(case, path, target, nbytes=None):
+        nbytes = nbytes if nbytes is not None else os.path.getsize(path)
+        secs, scene = best_of(lambda: mvrml.load(path), reps)
+        if peer is not None:
+            try:
+                psecs, _ = best_of(lambda: peer(path), reps)
+                pinfo = (peer_label, psecs)
+            except Exception as e:
+                pinfo = f"failed ({type(e).__name__}: {str(e)[:80]})"
+        else:
+            pinfo = None
+        res.speed(case, nbytes, secs, target, pinfo)
+        if target is not None and nbytes / MB / secs < target:
+            to_profile.append((case, lambda: mvrml.load(path)))
+        gc.collect()
+        return scene
+
+    with tempfile.TemporaryDirectory(prefix="mpeg4fba-bench-") as tmp:
+        tmp = Path(tmp)
+
+        # 1. Choreonoid WAIST.wrl
+        case1 = "read WAIST.wrl (Choreonoid, 1 mesh)"
+        shared = shared_dir()
+        waist = shared / WAIST
+        if waist.is_file():
+            scenes["WAIST.wrl"] = read_case(case1, waist, 40)
+        else:
+            res.skip(case1, f"{waist} not found (set MPEG4FBA_SHARED)")
+
+        # 2. generated IndexedFaceSet
+        ifs_path = tmp / "ifs.wrl"
+        t0 = time.perf_counter()
+        info = generate.write_ifs(ifs_path, int(args.ifs_mb * MB), seed=0)
+        print(f"# generated {ifs_path.name}: {info['bytes'] / MB:.2f} MB, {info['points']} "
+              f"points, {info['triangles']} triangles, {info['numbers']} numbers "
+              f"in {time.perf_counter() - t0:.1f} s", flush=True)
+        case2 = f"read IndexedFaceSet ({args.ifs_mb:g} MB generated)"
+        scene = read_case(case2, ifs_path, 40)
+        del scene
+        gc.collect()
+        payload = info["numbers"] * 8
+        mem = measure_memory(ifs_path, payload)
+        rss_x = mem["rss_increase"] / payload
+        tm_x = mem["traced_peak"] / payload
+        print(f"{'  peak memory of that load':<40} payload {payload / MB:.1f} MB "
+              f"({info['numbers']} numbers x 8 B): peak RSS +{mem['rss_increase'] / MB:.1f} MB "
+              f"= {rss_x:.2f}x (over ru_maxrss baseline: "
+              f"{mem['rss_increase_maxrss_base'] / payload:.2f}x), tracemalloc peak "
+              f"{mem['traced_peak'] / MB:.1f} MB = {tm_x:.2f}x, retained "
+              f"{mem['traced_current'] / MB:.1f} MB = {mem['traced_current'] / payload:.2f}x   "
+              f"target < 3x: {'met' if max(rss_x, tm_x) < 3 else 'MISSED'}", flush=True)
+        res.other(f"  peak RSS increase, {case2.split(' (')[0][5:]}", info["bytes"],
+                  f"{rss_x:.2f}x payload ({mem['rss_increase'] / MB:.0f} MB)", "< 3x", rss_x < 3)
+        res.other("  tracemalloc peak, same load", info["bytes"],
+                  f"{tm_x:.2f}x payload ({mem['traced_peak'] / MB:.0f} MB)", "< 3x", tm_x < 3)
+
+        # 3. 4,096 Transforms
+        tr_path = tmp / "transforms.wrl"
+        generate.write_text(tr_path, generate.transforms_text(4096, seed=0))
+        case3 = "read 4,096 Transform/Shape/Box nodes"
+        scenes["4,096 Transforms"] = read_case(case3, tr_path, 2)
+
+        # 4. writing
+        for name, scene in scenes.items():
+            secs, text = best_of(lambda: mvrml.dumps(scene), reps)
+            res.speed(f"write {name} (dumps)", len(text.encode("utf-8")), secs,
+                      note="size = output text")
+
+    if peer is None:
+        print(f"# no peer ratios: {peer_note}")
+
+    if args.profile:
+        if not to_profile:
+            print("\n# --profile: every read case met its target; nothing profiled")
+        for case, fn in to_profile:
+            print(f"\n# cProfile of one '{case}' (missed its target), top 10 by cumulative time")
+            print(profile_top(fn))
+
+    print("\n" + res.table(peer_label))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -624,8 +624,10 @@ class _Builder:
                 d, direction = ev
                 if direction != want and direction != "inout":
                     word = "eventOut" if want == "out" else "eventIn"
+                    what = {"in": "eventIn", "out": "eventOut", "field": "field"}[direction]
+                    what += "" if d.kind != "exposedField" else " of an exposedField"
                     raise self.err(f"ROUTE {'from' if want == 'out' else 'to'} "
-                                   f"{ntok.value}.{ftok.value}, which is an {d.kind}",
+                                   f"{ntok.value}.{ftok.value}, which is an {what}",
                                    ftok.start_pos, [f"an {word} or exposedField"])
             ends.append((node, ev))
         (a, ea), (b, eb) = ends

@@ -1,0 +1,97 @@
+"""The ``mpeg4fba`` command: a click group with one module per subcommand.
+
+Errors the user can fix (bad VRML, bad values, unreadable files) print one line,
+``mpeg4fba: error: <message>``, to stderr and exit with status 1; ``--verbose``
+shows the traceback as well.  Usage errors exit with status 2, as click does.
+
+Example
+-------
+>>> from click.testing import CliRunner
+>>> result = CliRunner().invoke(main, ["info", "--example"])
+>>> result.exit_code, "HeadMesh" in result.output
+(0, True)
+"""
+from __future__ import annotations
+
+import sys
+import traceback
+import warnings
+from typing import Any, Optional
+
+import click
+
+from .. import __version__
+from ..vrml import Scene, VRMLError, load
+
+__all__ = ["main", "read_scene"]
+
+
+def _one_line(error: BaseException) -> str:
+    """A message for an error, on one line."""
+    if isinstance(error, OSError) and not isinstance(error, VRMLError) and error.strerror:
+        where = f"{error.filename}: " if error.filename else ""
+        text = f"{where}{error.strerror}"
+    else:
+        text = str(error) or type(error).__name__
+    return " ".join(text.split())
+
+
+class _Group(click.Group):
+    """A click group that turns the errors users can fix into one line and exit code 1."""
+
+    def invoke(self, ctx: click.Context) -> Any:
+        try:
+            return super().invoke(ctx)
+        except (VRMLError, ValueError, OSError) as e:
+            if ctx.params.get("verbose") or (ctx.obj or {}).get("verbose"):
+                traceback.print_exc(file=sys.stderr)
+            click.echo(f"mpeg4fba: error: {_one_line(e)}", err=True)
+            ctx.exit(1)
+
+
+@click.group(cls=_Group, context_settings={"help_option_names": ["-h", "--help"]})
+@click.option("--verbose", "-v", is_flag=True, help="Show tracebacks and more detail.")
+@click.version_option(__version__, "--version", "-V", prog_name="mpeg4fba")
+@click.pass_context
+def main(ctx: click.Context, verbose: bool) -> None:
+    """MPEG-4 Face and Body Animation toolkit.
+
+    \b
+    Examples:
+      mpeg4fba info face.wrl
+      mpeg4fba convert face.wrl face.wrl.gz
+    """
+    ctx.ensure_object(dict)
+    ctx.obj["verbose"] = verbose
+
+
+def read_scene(path: str, lenient: bool = False) -> Scene:
+    """Read a VRML file for a subcommand; lenient-reading warnings go to stderr, one line each.
+
+    >>> import os, tempfile
+    >>> p = os.path.join(tempfile.mkdtemp(), "a.wrl")
+    >>> _ = open(p, "w").write("#VRML V2.0 utf8\\nGroup {}")
+    >>> read_scene(p).nodes[0].type
+    'Group'
+    """
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        scene = load(path, strict=not lenient)
+    for w in caught:
+        click.echo(f"mpeg4fba: warning: {' '.join(str(w.message).split())}", err=True)
+    return scene
+
+
+def verbose(ctx: Optional[click.Context] = None) -> bool:
+    """Whether ``--verbose`` was given to the group."""
+    ctx = ctx or click.get_current_context(silent=True)
+    while ctx is not None:
+        if isinstance(ctx.obj, dict) and "verbose" in ctx.obj:
+            return bool(ctx.obj["verbose"])
+        ctx = ctx.parent
+    return False
+
+
+from . import convert, info  # noqa: E402  (the subcommands register themselves on main)
+
+__all__ += ["info", "convert"]

@@ -1,0 +1,120 @@
+"""``mpeg4fba info``: what a VRML file holds — node counts, PROTOs, ROUTEs, DEFs, meshes.
+
+Example
+-------
+>>> from click.testing import CliRunner
+>>> from mpeg4fba.cli import main
+>>> result = CliRunner().invoke(main, ["info", "--example", "--json"])
+>>> import json; json.loads(result.output)["routes"]
+2
+"""
+from __future__ import annotations
+
+import json
+from collections import Counter
+from typing import Any, Optional
+
+import click
+
+from ..vrml import ExternProto, Node, Proto, Scene
+from ..vrml.walk import Mesh, iter_meshes
+from . import main, read_scene
+
+__all__ = ["info", "scene_info"]
+
+
+def _label(node: Node) -> str:
+    return node.name or node.type
+
+
+def _path_text(nodes: tuple, keep: int = 8) -> str:
+    """``Head/LeftEye/Shape``; long paths keep their two first and last few steps."""
+    labels = [_label(n) for n in nodes[:2]]
+    if len(nodes) > keep:
+        labels += [f"...{len(nodes) - keep + 2} more..."] + [_label(n) for n in nodes[-(keep - 2):]]
+    else:
+        labels = [_label(n) for n in nodes]
+    return "/".join(labels)
+
+
+def _mesh_info(mesh: Mesh) -> dict:
+    owner = mesh.path + ((mesh.shape,) if mesh.shape is not None else ())
+    bounds = mesh.bounds
+    return {
+        "name": mesh.geometry.name or (mesh.shape.name if mesh.shape is not None else None),
+        "path": _path_text(owner + (mesh.geometry,)),
+        "vertices": int(len(mesh.vertices)),
+        "triangles": int(len(mesh.triangles)),
+        "bounds": None if bounds is None else [b.tolist() for b in bounds],
+    }
+
+
+def scene_info(scene: Scene) -> dict:
+    """The facts ``info`` reports about ``scene``, as plain JSON-ready values.
+
+    >>> from mpeg4fba.vrml.examples import example_scene
+    >>> facts = scene_info(example_scene(1))
+    >>> facts["protos"], facts["defs"], [m["name"] for m in facts["meshes"]]
+    (['LoopingClock'], 11, ['HeadMesh', 'EyeMesh', 'EyeMesh', 'NoseMesh'])
+    """
+    nodes = list(scene)
+    counts = Counter(n.type for n in nodes)
+    meshes = [_mesh_info(m) for m in iter_meshes(scene)]
+    lows = [m["bounds"][0] for m in meshes if m["bounds"] is not None]
+    highs = [m["bounds"][1] for m in meshes if m["bounds"] is not None]
+    bounds: Optional[dict] = None
+    if lows:
+        bounds = {"min": [min(v) for v in zip(*lows)], "max": [max(v) for v in zip(*highs)]}
+    return {
+        "file": scene.path,
+        "node_count": len(nodes),
+        "nodes": dict(sorted(counts.items(), key=lambda kv: (-kv[1], kv[0]))),
+        "protos": [p.name for p in scene.protos if isinstance(p, Proto)],
+        "externprotos": [p.name for p in scene.protos if isinstance(p, ExternProto)],
+        "routes": len(scene.routes),
+        "defs": sum(1 for n in nodes if n.name is not None),
+        "meshes": meshes,
+        "bounds": bounds,
+    }
+
+
+def _xyz(values: list) -> str:
+    return "(" + ", ".join(f"{v:.6g}" for v in values) + ")"
+
+
+def _text(facts: dict) -> str:
+    lines = [f"file: {facts['file'] or '<built-in example>'}",
+             f"nodes: {facts['node_count']} ({len(facts['nodes'])} types)"]
+    width = max((len(t) for t in facts["nodes"]), default=0)
+    lines += [f"  {t:<{width}}  {c}" for t, c in facts["nodes"].items()]
+    lines.append("PROTOs: " + (", ".join(facts["protos"]) or "none"))
+    lines.append("EXTERNPROTOs: " + (", ".join(facts["externprotos"]) or "none"))
+    lines.append(f"ROUTEs: {facts['routes']}")
+    lines.append(f"DEFs: {facts['defs']}")
+    lines.append(f"meshes: {len(facts['meshes'])}")
+    for m in facts["meshes"]:
+        name = m["name"] or m["path"]
+        where = f"  at {m['path']}" if m["name"] else ""
+        lines.append(f"  {name}: {m['vertices']} vertices, {m['triangles']} triangles{where}")
+    b = facts["bounds"]
+    lines.append("bounds: " + ("none" if b is None else f"{_xyz(b['min'])} to {_xyz(b['max'])}"))
+    return "\n".join(lines)
+
+
+@main.command(epilog="\b\nExamples:\n  mpeg4fba info face.wrl\n  mpeg4fba info --json face.wrl.gz"
+                     "\n  mpeg4fba info --example")
+@click.argument("file", required=False, metavar="FILE.wrl")
+@click.option("--json", "as_json", is_flag=True, help="Print the facts as JSON.")
+@click.option("--lenient", is_flag=True, help="Keep nodes and fields that are not VRML97 (warns).")
+@click.option("--example", is_flag=True, help="Describe the built-in example scene instead of FILE.")
+def info(file: Optional[str], as_json: bool, lenient: bool, example: bool) -> None:
+    """Node counts, PROTOs, ROUTEs, DEFs, meshes and bounding box of a VRML97 file."""
+    if example == (file is not None):
+        raise click.UsageError("give either FILE or --example")
+    if example:
+        from ..vrml.examples import example_scene
+        scene = example_scene()
+    else:
+        scene = read_scene(file, lenient)
+    facts: Any = scene_info(scene)
+    click.echo(json.dumps(facts, indent=2) if as_json else _text(facts))

@@ -13,17 +13,18 @@ Example
 """
 from __future__ import annotations
 
+import contextlib
 import sys
 import traceback
 import warnings
-from typing import Any, Optional
+from typing import Any, Iterator, Optional
 
 import click
 
 from .. import __version__
 from ..vrml import Scene, VRMLError, load
 
-__all__ = ["main", "read_scene"]
+__all__ = ["main", "read_scene", "warnings_to_stderr"]
 
 
 def _one_line(error: BaseException) -> str:
@@ -74,12 +75,24 @@ def read_scene(path: str, lenient: bool = False) -> Scene:
     >>> read_scene(p).nodes[0].type
     'Group'
     """
+    with warnings_to_stderr():
+        return load(path, strict=not lenient)
+
+
+@contextlib.contextmanager
+def warnings_to_stderr() -> Iterator[None]:
+    """Show warnings raised inside the block as ``mpeg4fba: warning: <message>`` lines.
+
+    >>> with warnings_to_stderr():
+    ...     warnings.warn("careful")
+    """
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        scene = load(path, strict=not lenient)
-    for w in caught:
-        click.echo(f"mpeg4fba: warning: {' '.join(str(w.message).split())}", err=True)
-    return scene
+        try:
+            yield
+        finally:
+            for w in caught:
+                click.echo(f"mpeg4fba: warning: {' '.join(str(w.message).split())}", err=True)
 
 
 def verbose(ctx: Optional[click.Context] = None) -> bool:

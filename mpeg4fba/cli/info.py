@@ -18,7 +18,7 @@ import click
 
 from ..vrml import ExternProto, Node, Proto, Scene
 from ..vrml.walk import Mesh, iter_meshes
-from . import main, read_scene
+from . import main, read_scene, warnings_to_stderr
 
 __all__ = ["info", "scene_info"]
 
@@ -103,7 +103,7 @@ def _text(facts: dict) -> str:
 
 @main.command(epilog="\b\nExamples:\n  mpeg4fba info face.wrl\n  mpeg4fba info --json face.wrl.gz"
                      "\n  mpeg4fba info --example")
-@click.argument("file", required=False, metavar="FILE.wrl")
+@click.argument("file", required=False, metavar="[FILE.wrl]")
 @click.option("--json", "as_json", is_flag=True, help="Print the facts as JSON.")
 @click.option("--lenient", is_flag=True, help="Keep nodes and fields that are not VRML97 (warns).")
 @click.option("--example", is_flag=True, help="Describe the built-in example scene instead of FILE.")
@@ -116,5 +116,6 @@ def info(file: Optional[str], as_json: bool, lenient: bool, example: bool) -> No
         scene = example_scene()
     else:
         scene = read_scene(file, lenient)
-    facts: Any = scene_info(scene)
+    with warnings_to_stderr():
+        facts: Any = scene_info(scene)
     click.echo(json.dumps(facts, indent=2) if as_json else _text(facts))

@@ -67,7 +67,25 @@ class Source:
         self.path = path
         self._line_starts = None
 
-    def _starts(self) -> list:
+    def compact(self) -> None:
+        """Keep only the line starts, not the text (for large ASCII files).
+
+        Nodes keep their Source for error locations; without this a loaded 50 MB file
+        would hold its 50 MB of text for as long as the scene lives.
+        """
+        text = self.text
+        if text is None or self._line_starts is not None or not text.isascii():
+            return
+        import numpy as np
+        starts = [np.zeros(1, dtype=np.int64)]
+        step = 1 << 22
+        for i in range(0, len(text), step):
+            chunk = np.frombuffer(text[i:i + step].encode("ascii"), dtype=np.uint8)
+            starts.append(np.flatnonzero(chunk == 10) + (i + 1))
+        self._line_starts = np.concatenate(starts)
+        self.text = None
+
+    def _starts(self):
         if self._line_starts is None:
             starts = [0]
             text = self.text
@@ -81,9 +99,9 @@ class Source:
 
     def line_column(self, offset: int) -> tuple[int, int]:
         starts = self._starts()
-        offset = max(0, min(offset, len(self.text)))
+        offset = max(0, offset if self.text is None else min(offset, len(self.text)))
         i = bisect.bisect_right(starts, offset) - 1
-        return i + 1, offset - starts[i] + 1
+        return i + 1, offset - int(starts[i]) + 1
 
     def error(self, message: str, offset: Optional[int], expected: Iterable[str] = ()) -> VRMLError:
         if offset is None:

@@ -97,55 +97,73 @@ def _convert_chunk(chunk: str, base: int, text: str, start: int, end: int, integ
         chunk = _COMMENT_RE.sub(" ", chunk)
     if "x" in chunk or "X" in chunk:
         return _parse_slow(text, start, end, integer)
-    if integer:
+    if integer and ("." in chunk or "e" in chunk or "E" in chunk):
         bad = _NOT_INTEGER_RE.search(chunk)
-        if bad is not None:
-            off = _locate_bad_number(text, start, end)
-            if off < end:
-                raise NumberError("not a number", off)
-            # The offset in the chunk maps to the text because comments were replaced in place.
-            raise NumberError(f"expected an integer, found {bad.group()!r}", base + bad.start())
+        off = _locate_bad_number(text, start, end)
+        if off < end:
+            raise NumberError("not a number", off)
+        # Offsets in the chunk are offsets in the text: comments were blanked in place.
+        raise NumberError(f"expected an integer, found {bad.group()!r}", base + bad.start())
     if "," in chunk:
         chunk = chunk.replace(",", " ")
     if not chunk.strip():
-        return np.empty(0)
+        return np.empty(0, dtype=np.int64 if integer else np.float64)
     try:
-        return np.fromstring(chunk, dtype=np.float64, sep=" ")
+        return np.fromstring(chunk, dtype=np.int64 if integer else np.float64, sep=" ")
     except ValueError:
         raise NumberError("not a number", _locate_bad_number(text, start, end)) from None
 
 
-def parse_numbers(text: str, start: int = 0, end: Optional[int] = None, integer: bool = False) -> np.ndarray:
+def parse_numbers(text: str, start: int = 0, end: Optional[int] = None,
+                  integer: bool = False) -> np.ndarray:
     """All numbers in ``text[start:end]`` (separated by white space, commas, comments).
 
-    Converted by numpy in chunks of a few MB, so a 50 MB run costs one array and no
-    per-number Python work.  Hexadecimal integers (``0xFF``) are accepted.  With
-    ``integer=True`` the numbers must be written as integers; the result is then
-    int64, else float64.  Raises :class:`NumberError` with the offset of the culprit.
+    Converted by numpy in chunks of a few MB straight into one growing array, so a
+    50 MB run costs about one copy of its values and no per-number Python work.
+    Hexadecimal integers (``0xFF``) are accepted.  With ``integer=True`` the numbers
+    must be written as integers and the result is int32 when every value fits (else
+    int64); otherwise it is float64.  Raises :class:`NumberError` with the offset of
+    the culprit.
 
     >>> parse_numbers("1, 2.5 # comment\\n -3e2").tolist()
     [1.0, 2.5, -300.0]
+    >>> parse_numbers("[ 1 -1 ]", 1, 7, integer=True).dtype
+    dtype('int32')
     """
     if end is None:
         end = len(text)
     if end - start <= _CHUNK:
-        out = _convert_chunk(text[start:end], start, text, start, end, integer)
-    else:
-        # Split at line ends only, so a chunk never cuts a comment in two.
-        parts = []
-        pos = start
-        while pos < end:
-            cut = min(pos + _CHUNK, end)
-            if cut < end:
-                nl = text.find("\n", cut, end)
-                cut = end if nl < 0 else nl + 1
-            parts.append(_convert_chunk(text[pos:cut], pos, text, pos, cut, integer))
-            pos = cut
-        out = np.concatenate(parts) if len(parts) > 1 else parts[0]
-    if integer:
-        if out.dtype != np.int64:
-            out = out.astype(np.int64)
+        return _narrow(_convert_chunk(text[start:end], start, text, start, end, integer))
+    out = None
+    n = 0
+    pos = start
+    while pos < end:
+        cut = min(pos + _CHUNK, end)
+        if cut < end:  # split at line ends only, so a chunk never cuts a comment in two
+            nl = text.find("\n", cut, end)
+            cut = end if nl < 0 else nl + 1
+        part = _narrow(_convert_chunk(text[pos:cut], pos, text, pos, cut, integer))
+        if out is None:
+            # Size the array from the first chunk's density, with a little to spare.
+            guess = int(len(part) * (end - start) / max(cut - pos, 1) * 1.02) + 16
+            out = np.empty(guess, dtype=part.dtype)
+        elif part.dtype != out.dtype:
+            out = out.astype(np.result_type(out.dtype, part.dtype))
+        if n + len(part) > len(out):
+            out.resize(max(n + len(part), len(out) + len(out) // 4), refcheck=False)
+        out[n:n + len(part)] = part
+        n += len(part)
+        pos = cut
+    out.resize(n, refcheck=False)  # shrinks in place: no copy
     return out
+
+
+def _narrow(values: np.ndarray) -> np.ndarray:
+    """int64 values as int32 when they all fit (the common case for index lists)."""
+    if values.dtype == np.int64 and values.size and \
+            values.min() >= _INT32_MIN and values.max() <= _INT32_MAX:
+        return values.astype(np.int32)
+    return values
 
 
 @dataclass(eq=False)
@@ -185,7 +203,7 @@ class Image:
 
 # -- formatting -----------------------------------------------------------------------
 
-_TRAILING_ZERO_RE = re.compile(r"\.0(?=[ \n]|$)")
+_TRAILING_ZERO_RE = re.compile(r"\.0(?=[ ,\n]|$)")
 
 
 def format_float(x: float) -> str:
@@ -382,8 +400,9 @@ class FieldType:
         if self.kind == "int":
             if n and (numbers.min() < _INT32_MIN or numbers.max() > 0xFFFFFFFF):
                 raise ValueError(f"{self.name} value outside the 32-bit range")
-            return numbers.astype(np.int64).astype(np.uint32).astype(np.int32) \
-                if n and numbers.max() > _INT32_MAX else numbers.astype(np.int32)
+            if n and numbers.max() > _INT32_MAX:  # hexadecimal written unsigned
+                return numbers.astype(np.int64).astype(np.uint32).astype(np.int32)
+            return numbers.astype(np.int32, copy=False)
         if w > 1:
             return numbers.reshape(-1, w)
         return numbers
@@ -407,7 +426,7 @@ class FieldType:
                 items = list(map(str, np.asarray(value).tolist()))
                 text = _format_index_list(items, inner)
             else:
-                text = format_floats(value, self.width if n > 1 else 0, inner)
+                text = format_floats(value, self.width if self.width > 1 else 10, inner)
             if n == 1:
                 return text
             if "\n" in text or len(text) > 60:

@@ -42,6 +42,7 @@ class VRMLWarning(UserWarning):
     """Something the lenient reader kept although it is not VRML97."""
 
 
+_COMPACT_ABOVE = 8 << 20  # chars: above this a Source keeps line starts, not the text
 _HEADER_RE = re.compile(r"#VRML[ \t]+V2\.0[ \t]+utf8")
 
 # Where a token may name its kind in an error message.
@@ -849,6 +850,8 @@ def loads(text: str, strict: bool = True, path: Optional[str] = None,
             builder.reset(Source(""), True)
             _FastLexer.current_source = None
     scene.path = src.path
+    if len(text) > _COMPACT_ABOVE:
+        src.compact()
     return scene
 
 

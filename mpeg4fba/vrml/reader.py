@@ -641,8 +641,11 @@ class _Builder:
         return r
 
     def proto_head(self, items):
-        tok = items[0]
-        p = self.Proto(tok.value)
+        return self.open_declaration(self.Proto, items[0])
+
+    def open_declaration(self, cls, tok):
+        """A PROTO or EXTERNPROTO whose interface is about to be read."""
+        p = cls(tok.value)
         p._source, p._pos = self.src, tok.start_pos
         self.frames.append(p)
         return p
@@ -663,11 +666,7 @@ class _Builder:
         return proto
 
     def externproto_head(self, items):
-        tok = items[0]
-        p = self.ExternProto(tok.value)
-        p._source, p._pos = self.src, tok.start_pos
-        self.frames.append(p)
-        return p
+        return self.open_declaration(self.ExternProto, items[0])
 
     def externproto(self, items):
         proto = items[0]

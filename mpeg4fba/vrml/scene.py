@@ -182,19 +182,26 @@ class RawValue:
         return f"RawValue({self.items!r}, bracketed={self.bracketed})"
 
 
-class Proto(Interface):
-    """A PROTO declaration: interface (declarations with defaults) and body statements."""
+class _Declared(Interface):
+    """A node type the file declares: a name and an interface of FieldDecls."""
 
-    def __init__(self, name: str, interface: Optional[list] = None, body: Optional[list] = None):
+    def __init__(self, name: str, interface: Optional[list] = None):
         self.name = name
         self.fields = {d.name: d for d in (interface or [])}
-        self.body: list = body or []
         self._source = None
         self._pos = None
 
     @property
     def interface(self) -> list:
         return list(self.fields.values())
+
+
+class Proto(_Declared):
+    """A PROTO declaration: interface (declarations with defaults) and body statements."""
+
+    def __init__(self, name: str, interface: Optional[list] = None, body: Optional[list] = None):
+        super().__init__(name, interface)
+        self.body: list = body or []
 
     @property
     def classes(self) -> Optional[frozenset]:
@@ -208,19 +215,12 @@ class Proto(Interface):
         return f"<Proto {self.name} [{' '.join(self.fields)}]>"
 
 
-class ExternProto(Interface):
+class ExternProto(_Declared):
     """An EXTERNPROTO declaration: interface without values, and the URLs."""
 
     def __init__(self, name: str, interface: Optional[list] = None, urls: Optional[list] = None):
-        self.name = name
-        self.fields = {d.name: d for d in (interface or [])}
+        super().__init__(name, interface)
         self.urls: list = urls or []
-        self._source = None
-        self._pos = None
-
-    @property
-    def interface(self) -> list:
-        return list(self.fields.values())
 
     def __repr__(self) -> str:
         return f"<ExternProto {self.name} {self.urls!r}>"

@@ -129,13 +129,7 @@ class _Writer:
         ind, ind1 = _indent(level), _indent(level + 1)
         ops = [ind + f"PROTO {p.name} [\n"]
         for d in p.fields.values():
-            head = ind1 + f"{d.kind} {d.type.name} {d.name}"
-            if d.has_value:
-                ops.append(head + " ")
-                ops.extend(self.value(d.type, d.default, level + 1))
-                ops.append("\n")
-            else:
-                ops.append(head + "\n")
+            ops.extend(self.declaration(d, None, level + 1))
         ops.append(ind + "]\n" + ind + "{\n")
         saved = (self.names, self.written, self.bound)
 
@@ -152,6 +146,15 @@ class _Writer:
         ops.append(("call", leave))
         ops.append(ind + "}\n")
         return ops
+
+    def declaration(self, d, bound_to, level: int) -> list:
+        """``kind type name`` plus its value, or ``IS bound_to`` when it is bound."""
+        line = _indent(level) + f"{d.kind} {d.type.name} {d.name}"
+        if bound_to is not None:
+            return [line + f" IS {bound_to}\n"]
+        if d.has_value:
+            return [line + " "] + self.value(d.type, d.default, level) + ["\n"]
+        return [line + "\n"]
 
     def node(self, node: Node, level: int) -> list:
         k = id(node)
@@ -172,15 +175,7 @@ class _Writer:
         interface_names = set()
         for d in node.interface:
             interface_names.add(d.name)
-            line = ind + f"{d.kind} {d.type.name} {d.name}"
-            if d.name in node.is_map:
-                ops.append(line + f" IS {node.is_map[d.name]}\n")
-            elif d.has_value:
-                ops.append(line + " ")
-                ops.extend(self.value(d.type, d.default, level + 1))
-                ops.append("\n")
-            else:
-                ops.append(line + "\n")
+            ops.extend(self.declaration(d, node.is_map.get(d.name), level + 1))
         for fname, value in node.fields.items():
             ops.append(ind + fname + " ")
             if isinstance(value, RawValue):

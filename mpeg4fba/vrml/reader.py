@@ -773,6 +773,20 @@ def _make_callback(name: str, expansion, plan: list, builder: _Builder):
     return call
 
 
+def is_name(text: str) -> bool:
+    """Whether ``text`` is a VRML97 name (the grammar's ID, and not a keyword).
+
+    >>> is_name("Head_1"), is_name("1st"), is_name("a.b"), is_name("PROTO")
+    (True, False, False, False)
+    """
+    parser, _ = _get_parser()
+    lexer = parser.parser.lexer
+    lexer = getattr(lexer, "lexer", lexer)  # lark wraps interface-0 lexers
+    m = lexer.master.fullmatch(text)
+    return (m is not None and m.lastgroup == "ID" and m.start("ID") == 0
+            and lexer.word_type(text) == "ID")
+
+
 def _syntax_error(src: Source, e: UnexpectedInput) -> VRMLError:
     tok = getattr(e, "token", None)
     expected = sorted(getattr(e, "expected", ()) or ())

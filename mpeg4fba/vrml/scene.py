@@ -41,8 +41,10 @@ class Node:
     __slots__ = ("type", "decl", "fields", "name", "is_map", "interface", "statements",
                  "_source", "_pos", "__weakref__")
 
-    def __init__(self, type: str, decl: Optional[Interface] = None, name: Optional[str] = None,
+    def __init__(self, type: str, /, decl: Optional[Interface] = None, name: Optional[str] = None,
                  **fields: Any):
+        # ``type`` is positional-only so that a field called "type" (NavigationInfo.type)
+        # can be given as a keyword.
         self.type = type
         if decl is None:
             decl = NODE_TYPES.get(type)

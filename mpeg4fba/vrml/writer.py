@@ -33,6 +33,12 @@ HEADER = "#VRML V2.0 utf8\n"
 _MAX_INDENT = 40
 
 
+def _valid_name(name: str) -> bool:
+    """Whether ``name`` reads back as the same DEF name (the grammar decides)."""
+    from .reader import is_name
+    return is_name(name)
+
+
 def _indent(level: int) -> str:
     return "  " * min(level, _MAX_INDENT)
 
@@ -165,6 +171,9 @@ class _Writer:
                                 f"rename one of them")
             return [f"USE {name}"]
         self.written.add(k)
+        if name and not _valid_name(name):
+            raise VRMLError(f"can't write DEF {name!r}: not a VRML97 name (no spaces, no leading "
+                            "digit or sign, none of \" # ' , . [ \\ ] { })")
         head = (f"DEF {name} " if name else "") + node.type + " {"
         if name:
             self.bound[name] = k

@@ -5,7 +5,8 @@ through the environment variable ``MPEG4FBA_SHARED`` if set, else ``<repo>/../sh
 Tests that need it take the ``shared_dir`` fixture, which skips with a clear reason
 when it is absent (a user's fresh clone has none).
 
-Tests taking a ``corpus_row`` argument and marked ``@pytest.mark.corpus_role(...)``
+Tests taking a ``corpus_row`` argument (a manifest row as a dict, plus ``_role``:
+positive/negative/extension and ``_types``: the listed non-VRML97 node types) and marked ``@pytest.mark.corpus_role(...)``
 are parametrised here over the matching rows of ``data/vrml-corpus/MANIFEST.tsv``;
 without the corpus they get one skipped case, so collection never fails.  A test
 module may define ``CORPUS_XFAIL = {(test_name, local_path): "BUG: ..."}`` to mark
@@ -46,6 +47,9 @@ def corpus_rows(shared: Optional[Path]) -> tuple[list, str]:
         return [], f"../shared is absent: {manifest} does not exist"
     with open(manifest, newline="", encoding="utf-8") as f:
         rows = list(csv.DictReader(f, delimiter="\t"))
+    for row in rows:  # derived columns, so tests need not import this module
+        row["_role"] = row_role(row)
+        row["_types"] = row_types(row)
     return rows, ""
 
 
@@ -78,7 +82,7 @@ def pytest_generate_tests(metafunc):
     xfails = getattr(metafunc.module, "CORPUS_XFAIL", {})
     params = []
     for row in rows:
-        if row_role(row) not in roles:
+        if row["_role"] not in roles:
             continue
         marks = []
         bug = xfails.get((metafunc.function.__name__, row["local_path"]))
@@ -104,6 +108,15 @@ def shared_dir() -> Path:
 def shared_dir_or_none() -> Optional[Path]:
     """Path of ../shared, or None (for tests with a generated fallback)."""
     return locate_shared()[0]
+
+
+@pytest.fixture(scope="session")
+def corpus_manifest(shared_dir) -> list:
+    """All manifest rows (dicts, plus "_role" and "_types"), or skip."""
+    rows, why = corpus_rows(shared_dir)
+    if not rows:
+        pytest.skip(why or "../shared is absent: the VRML corpus manifest is empty")
+    return rows
 
 
 @pytest.fixture(scope="session")

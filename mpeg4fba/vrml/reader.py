@@ -84,6 +84,9 @@ class _Tok:
         return f"_Tok({self.type}, {self.value!r})"
 
 
+_SURROGATE_RE = re.compile("[\udc80-\udcff]")  # bytes that were not UTF-8, kept by _decode
+
+
 class _FastLexer(Lexer):
     """Lexer built from the grammar's own terminals (lark custom-lexer interface 0)."""
 
@@ -118,6 +121,8 @@ class _FastLexer(Lexer):
         self.words: dict = {}
 
     def word_type(self, word: str) -> str:
+        if not word.isascii() and _SURROGATE_RE.search(word):
+            return "ID"  # not cached: the lexer reports it
         for name, rx in self.word_terminals:
             if rx.fullmatch(word):
                 break
@@ -144,7 +149,15 @@ class _FastLexer(Lexer):
             pos = m.end()
             if i == g_id:
                 v = m.group(i)
-                yield tok(words.get(v) or self.word_type(v), v, start, pos)
+                kind = words.get(v)
+                if kind is None:
+                    kind = self.word_type(v)
+                    if not v.isascii() and _SURROGATE_RE.search(v):
+                        bad = start + _SURROGATE_RE.search(v).start()
+                        raise self.current_source.error(
+                            f"invalid UTF-8 (byte 0x{ord(text[bad]) - 0xDC00:02X}) in a name; "
+                            "VRML97 files are UTF-8", bad)
+                yield tok(kind, v, start, pos)
             elif i == g_num:
                 yield tok("NUMBERS", "", start, pos)
             elif i == g_str:
@@ -784,7 +797,11 @@ def is_name(text: str) -> bool:
     lexer = getattr(lexer, "lexer", lexer)  # lark wraps interface-0 lexers
     m = lexer.master.fullmatch(text)
     return (m is not None and m.lastgroup == "ID" and m.start("ID") == 0
-            and lexer.word_type(text) == "ID")
+            and lexer.word_type(text) in _NAME_TERMINALS)
+
+
+# What the grammar takes as a DEF/USE name (rule def_head): ID, and two keywords.
+_NAME_TERMINALS = ("ID", "IS", "TO")
 
 
 def _syntax_error(src: Source, e: UnexpectedInput) -> VRMLError:

@@ -79,13 +79,15 @@ class _Writer:
             stack.extend(reversed(s.children_nodes()))
         serial = 0
         for k, n in nodes.items():
-            if n.name:
-                self.names[k] = n.name
-            elif count.get(k, 0) > 1 or k in routed:
+            if not n.name and (count.get(k, 0) > 1 or k in routed):
                 serial += 1
                 while f"_{serial}" in taken:
                     serial += 1
-                self.names[k] = f"_{serial}"
+                # VRML needs a DEF name to share a node; the name is kept on the node, so
+                # the scene written and the scene read back are equal, names included.
+                n.name = f"_{serial}"
+            if n.name:
+                self.names[k] = n.name
 
     # -- output ---------------------------------------------------------------------------
     def run(self, ops: list) -> None:
@@ -232,7 +234,11 @@ class _Writer:
 
 
 def dumps(scene: Scene) -> str:
-    """The VRML97 text of ``scene``.  Raises VRMLError for values VRML97 can't hold."""
+    """The VRML97 text of ``scene``.  Raises VRMLError for values VRML97 can't hold.
+
+    A node used in several places (or named by a ROUTE) without a DEF name is given one,
+    ``_1``, ``_2``..., stored on the node: VRML97 can share a node only through a name.
+    """
     w = _Writer()
     w.plan_names(scene.statements)
     ops: list = []

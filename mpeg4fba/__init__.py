@@ -3,8 +3,14 @@
 >>> import mpeg4fba as fba
 >>> fba.vrml.loads("#VRML V2.0 utf8\\nGroup {}").nodes[0].type
 'Group'
+>>> fba.FAP[3].name
+'open_jaw'
 """
+from . import fba as standard
 from . import vrml
+from .fba import (EXPRESSIONS, FAP, FAPU, FEATURE_POINTS, VISEMES, FapFrame, FapStream,
+                  FeaturePointSet)
 
 __version__ = "0.1.0"
-__all__ = ["vrml", "__version__"]
+__all__ = ["vrml", "standard", "FAP", "FAPU", "FEATURE_POINTS", "VISEMES", "EXPRESSIONS",
+           "FapFrame", "FapStream", "FeaturePointSet", "__version__"]

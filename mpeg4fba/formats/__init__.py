@@ -1,0 +1,1 @@
+"""Files <-> objects, one module per format, each a read/write pair."""

@@ -10,7 +10,8 @@ from . import fba as standard
 from . import vrml
 from .fba import (EXPRESSIONS, FAP, FAPU, FEATURE_POINTS, VISEMES, FapFrame, FapStream,
                   FeaturePointSet)
+from .formats.fap import read_fap, write_fap
 
 __version__ = "0.1.0"
 __all__ = ["vrml", "standard", "FAP", "FAPU", "FEATURE_POINTS", "VISEMES", "EXPRESSIONS",
-           "FapFrame", "FapStream", "FeaturePointSet", "__version__"]
+           "FapFrame", "FapStream", "FeaturePointSet", "read_fap", "write_fap", "__version__"]

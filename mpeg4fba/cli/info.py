@@ -1,4 +1,8 @@
-"""``mpeg4fba info``: what a VRML file holds — node counts, PROTOs, ROUTEs, DEFs, meshes.
+"""``mpeg4fba info``: what a file holds.
+
+For a VRML file: node counts, PROTOs, ROUTEs, DEFs, meshes.  For a ``.fap`` animation
+(chosen by the extension, case-insensitive): frames, fps, duration, version, name, the
+animated FAPs and the min/max of each.
 
 Example
 -------
@@ -16,11 +20,12 @@ from typing import Any, Optional
 
 import click
 
+from ..fba.stream import FapStream
 from ..vrml import ExternProto, Node, Proto, Scene
 from ..vrml.walk import Mesh, iter_meshes
 from . import main, read_scene, warnings_to_stderr
 
-__all__ = ["info", "scene_info"]
+__all__ = ["info", "scene_info", "fap_info"]
 
 
 def _label(node: Node) -> str:
@@ -101,16 +106,81 @@ def _text(facts: dict) -> str:
     return "\n".join(lines)
 
 
+def _spans(numbers: list) -> str:
+    """``3-26, 39-42, 63`` for a sorted list of numbers.
+
+    >>> _spans([3, 4, 5, 9, 11, 12])
+    '3-5, 9, 11-12'
+    """
+    out = []
+    for k in numbers:
+        if out and out[-1][1] == k - 1:
+            out[-1][1] = k
+        else:
+            out.append([k, k])
+    return ", ".join(f"{a}-{b}" if b > a else f"{a}" for a, b in out)
+
+
+def fap_info(stream: FapStream, path: Optional[str] = None) -> dict:
+    """The facts ``info`` reports about a FAP stream, as plain JSON-ready values.
+
+    >>> s = FapStream.from_values({"open_jaw": [0, 100, 250]}, fps=25, name="demo")
+    >>> facts = fap_info(s)
+    >>> facts["frames"], facts["duration"], facts["animated"], facts["faps"]["3"]["max"]
+    (3, 0.12, [3], 250.0)
+    """
+    summary = stream.summary()
+    return {"file": path, "name": summary["name"], "version": summary["version"],
+            "frames": summary["frames"], "fps": summary["fps"], "duration": summary["duration"],
+            "animated": stream.animated,
+            "faps": {str(k): v for k, v in summary["faps"].items()}}
+
+
+def _number(x: float) -> str:
+    return f"{x:.6g}"
+
+
+def _fap_text(facts: dict) -> str:
+    lines = [f"file: {facts['file'] or '<stream>'}",
+             f"frames: {facts['frames']}",
+             f"fps: {_number(facts['fps'])}",
+             f"duration: {_number(facts['duration'])} s",
+             f"version: {facts['version']}",
+             f"name: {facts['name'] or '(none)'}",
+             f"animated FAPs: {len(facts['animated'])}"
+             + (f" ({_spans(facts['animated'])})" if facts["animated"] else "")]
+    if facts["faps"]:
+        width = max(len(v["name"]) for v in facts["faps"].values())
+        lines.append(f"  {'FAP':>3}  {'name':<{width}}  {'frames':>6}  {'min':>9}  {'max':>9}")
+        for number, v in facts["faps"].items():
+            low = _number(v["min"]) if "min" in v else "-"
+            high = _number(v["max"]) if "max" in v else "-"
+            lines.append(f"  {number:>3}  {v['name']:<{width}}  {v['frames']:>6}  {low:>9}  "
+                         f"{high:>9}")
+    return "\n".join(lines)
+
+
+def _is_fap(path: str) -> bool:
+    return path.lower().endswith(".fap")
+
+
 @main.command(epilog="\b\nExamples:\n  mpeg4fba info face.wrl\n  mpeg4fba info --json face.wrl.gz"
-                     "\n  mpeg4fba info --example")
-@click.argument("file", required=False, metavar="[FILE.wrl]")
+                     "\n  mpeg4fba info joy.fap\n  mpeg4fba info --example")
+@click.argument("file", required=False, metavar="[FILE.wrl|FILE.fap]")
 @click.option("--json", "as_json", is_flag=True, help="Print the facts as JSON.")
 @click.option("--lenient", is_flag=True, help="Keep nodes and fields that are not VRML97 (warns).")
 @click.option("--example", is_flag=True, help="Describe the built-in example scene instead of FILE.")
 def info(file: Optional[str], as_json: bool, lenient: bool, example: bool) -> None:
-    """Node counts, PROTOs, ROUTEs, DEFs, meshes and bounding box of a VRML97 file."""
+    """Node counts, PROTOs, ROUTEs, DEFs, meshes and bounding box of a VRML97 file;
+    frames, fps, duration and per-FAP min/max of a .fap animation."""
     if example == (file is not None):
         raise click.UsageError("give either FILE or --example")
+    if file is not None and _is_fap(file):
+        from ..formats.fap import read_fap
+        with warnings_to_stderr():
+            facts = fap_info(read_fap(file), file)
+        click.echo(json.dumps(facts, indent=2) if as_json else _fap_text(facts))
+        return
     if example:
         from ..vrml.examples import example_scene
         scene = example_scene()

@@ -190,9 +190,10 @@ class FapStream:
     def __eq__(self, other) -> bool:
         if not isinstance(other, FapStream):
             return NotImplemented
+        # Columns 0 and 1 (FAPs 1 and 2) carry no value: their fields are compared below.
         return (self.fps == other.fps and np.array_equal(self.mask, other.mask)
-                and np.array_equal(np.where(self.mask, self.values, 0),
-                                   np.where(other.mask, other.values, 0))
+                and np.array_equal(np.where(self.mask, self.values, 0)[:, 2:],
+                                   np.where(other.mask, other.values, 0)[:, 2:])
                 and np.array_equal(self.visemes[self.mask[:, 0]], other.visemes[other.mask[:, 0]])
                 and np.array_equal(self.expressions[self.mask[:, 1]],
                                    other.expressions[other.mask[:, 1]]))

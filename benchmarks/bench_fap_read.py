@@ -38,6 +38,8 @@ REPO = Path(__file__).resolve().parents[1]
 if str(REPO) not in sys.path:
     sys.path.insert(0, str(REPO))  # benchmark this working tree, not an installed copy
 
+from benchmarks.timing import best_of  # noqa: E402
+
 import numpy as np  # noqa: E402
 
 from mpeg4fba.fba.stream import FapStream  # noqa: E402
@@ -88,19 +90,6 @@ def to_crlf(path: Path) -> None:
     """Rewrite a file with Xface's line ends: a trailing space, then CRLF."""
     data = path.read_bytes().replace(b"\n", b" \r\n")
     path.write_bytes(data)
-
-
-def best_of(fn: Callable, reps: int) -> tuple:
-    """``(best seconds, last result)``: one warm-up call, then ``reps`` timed ones."""
-    result = fn()
-    best = float("inf")
-    for _ in range(reps):
-        result = None
-        gc.collect()
-        t0 = time.perf_counter()
-        result = fn()
-        best = min(best, time.perf_counter() - t0)
-    return best, result
 
 
 def profile_top(fn: Callable, n: int = 12) -> str:

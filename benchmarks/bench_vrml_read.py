@@ -37,6 +37,8 @@ REPO = Path(__file__).resolve().parents[1]
 if str(REPO) not in sys.path:
     sys.path.insert(0, str(REPO))  # benchmark this working tree, not an installed copy
 
+from benchmarks.timing import best_of  # noqa: E402
+
 import numpy as np  # noqa: E402
 
 from benchmarks import generate  # noqa: E402
@@ -50,19 +52,6 @@ def shared_dir() -> Path:
     """``$MPEG4FBA_SHARED``, else ``<repo>/../shared`` (may not exist)."""
     env = os.environ.get("MPEG4FBA_SHARED")
     return Path(env) if env else REPO.parent / "shared"
-
-
-def best_of(fn, reps: int):
-    """``(best seconds, last result)``: one warm-up call, then ``reps`` timed ones."""
-    result = fn()
-    best = float("inf")
-    for _ in range(reps):
-        result = None
-        gc.collect()
-        t0 = time.perf_counter()
-        result = fn()
-        best = min(best, time.perf_counter() - t0)
-    return best, result
 
 
 # -- the peer ------------------------------------------------------------------------------

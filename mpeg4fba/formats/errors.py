@@ -12,12 +12,12 @@ Example
 """
 from __future__ import annotations
 
-from typing import Optional
+from ..vrml.errors import LocatedError
 
 __all__ = ["FormatError"]
 
 
-class FormatError(ValueError):
+class FormatError(LocatedError):
     """A file that does not follow its format.
 
     ``path`` is the file (None for text given directly), ``line`` (1-based) where the
@@ -25,22 +25,3 @@ class FormatError(ValueError):
     ``message`` what is wrong.  ``str(error)`` reads ``path:line: message``
     (``path:line:column: message`` when the column is known).
     """
-
-    def __init__(self, message: str, path: Optional[str] = None, line: Optional[int] = None,
-                 column: Optional[int] = None):
-        self.message = message
-        self.path = None if path is None else str(path)
-        self.line = line
-        self.column = column
-        super().__init__(str(self))
-
-    def __str__(self) -> str:
-        where = self.path or "<string>"
-        if self.line is not None:
-            where += f":{self.line}"
-            if self.column is not None:
-                where += f":{self.column}"
-        return f"{where}: {self.message}"
-
-    def __reduce__(self):
-        return (FormatError, (self.message, self.path, self.line, self.column))

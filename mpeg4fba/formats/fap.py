@@ -84,9 +84,6 @@ class FapError(FormatError):
     "a.fap:1: unsupported version '3.1'"
     """
 
-    def __reduce__(self):
-        return (FapError, (self.message, self.path, self.line))
-
 
 class FapWarning(UserWarning):
     """Something in a ``.fap`` file that was read anyway (counts, numbering, extra columns)."""

@@ -15,7 +15,36 @@ import bisect
 from typing import Iterable, Optional
 
 
-class VRMLError(ValueError):
+class LocatedError(ValueError):
+    """An error in some text that says where: ``path``, ``line``, ``column`` (1-based;
+    each None when unknown) and ``message``; ``str(error)`` reads
+    ``path:line:column: message``.  The base of the errors of every reader.
+    """
+
+    def __init__(self, message: str, path: Optional[str] = None, line: Optional[int] = None,
+                 column: Optional[int] = None):
+        self.message = message
+        self.path = None if path is None else str(path)
+        self.line = line
+        self.column = column
+        super().__init__(str(self))
+
+    def where(self) -> str:
+        text = self.path or "<string>"
+        if self.line is not None:
+            text += f":{self.line}"
+            if self.column is not None:
+                text += f":{self.column}"
+        return text
+
+    def __str__(self) -> str:
+        return f"{self.where()}: {self.message}"
+
+    def __reduce__(self):
+        return (type(self), (self.message, self.path, self.line, self.column))
+
+
+class VRMLError(LocatedError):
     """A syntax or meaning error in VRML text, or a value that can't be written.
 
     ``path``, ``line`` and ``column`` (1-based, in characters) say where; ``message``
@@ -25,20 +54,11 @@ class VRMLError(ValueError):
 
     def __init__(self, message: str, path: Optional[str] = None, line: Optional[int] = None,
                  column: Optional[int] = None, expected: Iterable[str] = ()):
-        self.message = message
-        self.path = path
-        self.line = line
-        self.column = column
         self.expected = tuple(expected)
-        super().__init__(str(self))
+        super().__init__(message, path, line, column)
 
     def __str__(self) -> str:
-        where = self.path or "<string>"
-        if self.line is not None:
-            where += f":{self.line}"
-            if self.column is not None:
-                where += f":{self.column}"
-        text = f"{where}: {self.message}"
+        text = super().__str__()
         if self.expected:
             text += " (expected " + _one_of(self.expected) + ")"
         return text

@@ -1,0 +1,319 @@
+"""FaceModel: a face's meshes in their transform tree, its feature points, FAPU and FAT;
+and playback of FAP streams on it.
+
+Playback compiles the FAT once into one sparse operator per mesh (rows: the intervals
+of every FaceDefMesh touching the mesh; columns: vertex coordinates), so a whole stream
+is one sparse product per mesh: ``displacements[frames, 3n] = W[frames, slots] @ B``,
+where W holds each frame's interval weights.  Transforms are composed per frame with
+vectorised Rodrigues rotations.
+
+Example
+-------
+>>> from mpeg4fba.fba import FapStream
+>>> skin = FaceMesh("Skin", [[0, 0, 0], [1, 0, 0], [0, 1, 0]], [[0, 1, 2]])
+>>> fat = FAT([FaceDefTable(3, [FaceDefMesh("Skin", [0, 1024], [2], [[0, -0.001, 0]])])])
+>>> face = FaceModel([skin], fat=fat)
+>>> frames = face.play(FapStream.from_values({"open_jaw": [0, 512, 1024]}))
+>>> frames.vertices("Skin")[:, 2].round(6).tolist()
+[[0.0, 1.0, 0.0], [0.0, 0.488, 0.0], [0.0, -0.024, 0.0]]
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Iterable, Mapping, Optional, Sequence
+
+import numpy as np
+import scipy.sparse as sp
+
+from .fapu import FAPU
+from .fat import FAT, FaceDefTable, FaceDefMesh, interval_weights, rotation_matrices
+from .featurepoints import FeaturePointSet
+from .stream import FapStream
+from .tables import N_FAPS
+
+__all__ = ["FaceMesh", "FaceTransform", "FaceModel", "Playback", "table_values"]
+
+
+@dataclass(eq=False)
+class FaceMesh:
+    """A mesh of the face: neutral ``vertices`` [n, 3] in its own (local) coordinates,
+    ``triangles`` [m, 3], and ``parent``, the name of the Transform it hangs under
+    (None: the face's root)."""
+
+    name: str
+    vertices: np.ndarray
+    triangles: np.ndarray
+    parent: Optional[str] = None
+
+    def __post_init__(self):
+        self.vertices = np.asarray(self.vertices, dtype=np.float64).reshape(-1, 3)
+        self.triangles = np.asarray(self.triangles, dtype=np.int64).reshape(-1, 3)
+
+
+@dataclass(eq=False)
+class FaceTransform:
+    """A Transform of the face scene graph with its neutral values (VRML97 semantics)."""
+
+    name: str
+    parent: Optional[str] = None
+    translation: tuple = (0.0, 0.0, 0.0)
+    rotation: tuple = (0.0, 0.0, 1.0, 0.0)
+    scale: tuple = (1.0, 1.0, 1.0)
+    center: tuple = (0.0, 0.0, 0.0)
+    scale_orientation: tuple = (0.0, 0.0, 1.0, 0.0)
+
+    def matrices(self, rotation: Optional[np.ndarray] = None, translation: Optional[np.ndarray] = None,
+                 scale: Optional[np.ndarray] = None) -> np.ndarray:
+        """Local 4x4 matrices [frames, 4, 4] (or [1, 4, 4] for the neutral), VRML97 order
+        T C R SR S -SR -C, with per-frame rotation matrices / translations / scales."""
+        R = rotation if rotation is not None else \
+            rotation_matrices(self.rotation[:3], [self.rotation[3]])
+        T = translation if translation is not None else np.asarray([self.translation], float)
+        S = scale if scale is not None else np.asarray([self.scale], float)
+        n = max(len(R), len(T), len(S))
+        SR = rotation_matrices(self.scale_orientation[:3], [self.scale_orientation[3]])[0]
+        c = np.asarray(self.center, dtype=float)
+        M = np.tile(np.eye(4), (n, 1, 1))
+        lin = np.einsum("ij,fjk,kl->fil", SR, S[:, :, None] * np.eye(3)[None], SR.T)
+        lin = np.einsum("fij,fjk->fik", np.broadcast_to(R, (n, 3, 3)), np.broadcast_to(lin, (n, 3, 3)))
+        M[:, :3, :3] = lin
+        M[:, :3, 3] = np.broadcast_to(T, (n, 3)) + c - np.einsum("fij,j->fi", lin, c)
+        return M
+
+
+def table_values(table: FaceDefTable, held: np.ndarray, given: np.ndarray,
+                 visemes: np.ndarray, expressions: np.ndarray) -> np.ndarray:
+    """The value fed to ``table`` in each frame (see :mod:`mpeg4fba.fba.fat`)."""
+    if table.fap > 2:
+        return np.where(given[:, table.fap - 1], held[:, table.fap - 1], 0.0)
+    if table.fap == 1:
+        s1, s2, blend = visemes[:, 0], visemes[:, 1], visemes[:, 2].astype(float)
+        p = np.where(s1 == table.select, blend, 0.0) + np.where(s2 == table.select, 63.0 - blend, 0.0)
+        return np.where(given[:, 0], p, 0.0)
+    s1, i1, s2, i2 = (expressions[:, k] for k in range(4))
+    p = np.where(s1 == table.select, i1, 0.0) + np.where(s2 == table.select, i2, 0.0)
+    return np.where(given[:, 1], p.astype(float), 0.0)
+
+
+class _MeshOperator:
+    """The FaceDefMesh entries of one mesh as one sparse operator."""
+
+    def __init__(self, mesh: FaceMesh, entries: list):
+        self.mesh = mesh
+        self.entries = entries            # (table, FaceDefMesh, first slot)
+        self.n_slots = sum(m.n_intervals for _, m, _ in entries)
+        rows, cols, data = [], [], []
+        n3 = 3 * len(mesh.vertices)
+        for _, m, first in entries:
+            k, j = np.meshgrid(np.arange(len(m.indices)), np.arange(m.n_intervals), indexing="ij")
+            for c in range(3):
+                rows.append((3 * m.indices[k] + c).ravel())
+                cols.append((first + j).ravel())
+                data.append(m.displacements[:, :, c].ravel())
+        if rows:
+            r, c, d = np.concatenate(rows), np.concatenate(cols), np.concatenate(data)
+        else:
+            r = c = np.zeros(0, np.int64)
+            d = np.zeros(0)
+        # B^T as CSR [3n, slots]: the product with W^T [slots, frames] is one sparse matmul.
+        self.BT = sp.csr_matrix((d, (r, c)), shape=(n3, self.n_slots))
+        self.BT.sum_duplicates()
+
+    def weights(self, values: dict, n_frames: int) -> np.ndarray:
+        W = np.zeros((self.n_slots, n_frames))
+        for table, m, first in self.entries:
+            W[first:first + m.n_intervals] = interval_weights(m.borders, values[id(table)]).T
+        return W
+
+    def displaced(self, values: dict, n_frames: int) -> np.ndarray:
+        base = self.mesh.vertices
+        if self.n_slots == 0:
+            return np.broadcast_to(base, (n_frames,) + base.shape).copy()
+        D = self.BT @ self.weights(values, n_frames)           # [3n, frames]
+        return base[None] + D.T.reshape(n_frames, -1, 3)
+
+
+class FaceModel:
+    """A face: meshes, transform tree, feature points, FAPU and FAT.
+
+    ``fapu`` defaults to the one computed from ``points`` when those have the points it
+    needs.  ``play(stream)`` evaluates a FAP stream; ``compile()`` is done once and kept.
+    """
+
+    def __init__(self, meshes: Iterable[FaceMesh] = (), transforms: Iterable[FaceTransform] = (),
+                 points: Optional[FeaturePointSet] = None, fapu: Optional[FAPU] = None,
+                 fat: Optional[FAT] = None, name: str = "face"):
+        self.meshes: dict = {m.name: m for m in meshes}
+        self.transforms: dict = {t.name: t for t in transforms}
+        self.points = points if points is not None else FeaturePointSet()
+        self.fat = fat if fat is not None else FAT()
+        self.name = name
+        self._fapu = fapu
+        self._compiled = None
+        for m in self.meshes.values():
+            if m.parent is not None and m.parent not in self.transforms:
+                raise ValueError(f"mesh {m.name} hangs under {m.parent!r}, which is not a "
+                                 f"Transform of the face ({sorted(self.transforms)})")
+
+    @property
+    def fapu(self) -> Optional[FAPU]:
+        if self._fapu is None and len(self.points):
+            try:
+                self._fapu = FAPU.from_feature_points(self.points)
+            except ValueError:
+                return None
+        return self._fapu
+
+    @fapu.setter
+    def fapu(self, value: Optional[FAPU]) -> None:
+        self._fapu = value
+
+    # -- the transform tree -------------------------------------------------------------------
+    def chain(self, transform: Optional[str]) -> list:
+        """Transform names from the root down to ``transform``."""
+        out = []
+        seen = set()
+        while transform is not None:
+            if transform in seen:
+                raise ValueError(f"the transform tree loops at {transform}")
+            seen.add(transform)
+            out.append(transform)
+            transform = self.transforms[transform].parent
+        return out[::-1]
+
+    def world_matrix(self, transform: Optional[str], local: Optional[Mapping] = None) -> np.ndarray:
+        """World 4x4 matrices [frames, 4, 4] of a transform (or the root for None);
+        ``local`` maps transform names to per-frame local matrices overriding the neutral."""
+        local = local or {}
+        M = np.eye(4)[None]
+        for name in self.chain(transform):
+            L = local.get(name)
+            if L is None:
+                L = self.transforms[name].matrices()
+            M = np.einsum("fij,fjk->fik", np.broadcast_to(M, (max(len(M), len(L)), 4, 4)),
+                          np.broadcast_to(L, (max(len(M), len(L)), 4, 4)))
+        return M
+
+    def world_vertices(self, mesh: str, vertices: Optional[np.ndarray] = None) -> np.ndarray:
+        """Neutral (or given) vertices of ``mesh`` in world space."""
+        m = self.meshes[mesh]
+        v = m.vertices if vertices is None else vertices
+        M = self.world_matrix(m.parent)[0]
+        return v @ M[:3, :3].T + M[:3, 3]
+
+    # -- playback ---------------------------------------------------------------------------
+    def compile(self) -> "_Compiled":
+        if self._compiled is None:
+            self._compiled = _Compiled(self)
+        return self._compiled
+
+    def invalidate(self) -> None:
+        """Forget the compiled operators (call after editing meshes or the FAT)."""
+        self._compiled = None
+
+    def play(self, stream: FapStream) -> "Playback":
+        """Evaluate ``stream`` on the face: vertex positions and transform values per frame."""
+        return Playback(self, stream)
+
+    def pose(self, faps: Mapping, visemes: Optional[Sequence] = None,
+             expressions: Optional[Sequence] = None) -> "Playback":
+        """One frame from ``{fap: value}`` (and optional FAP 1 / FAP 2 fields)."""
+        s = FapStream.from_values({k: [v] for k, v in faps.items()}, fps=1, n_frames=1,
+                                  visemes=None if visemes is None else [visemes],
+                                  expressions=None if expressions is None else [expressions])
+        return self.play(s)
+
+    def __repr__(self) -> str:
+        return (f"<FaceModel {self.name}: {len(self.meshes)} meshes, {len(self.transforms)} "
+                f"transforms, {len(self.points)} feature points, {self.fat!r}>")
+
+
+class _Compiled:
+    def __init__(self, face: FaceModel):
+        self.face = face
+        per_mesh: dict = {name: [] for name in face.meshes}
+        self.transform_entries: dict = {}
+        for table in sorted(face.fat, key=lambda t: t.key):
+            for m in table.meshes:
+                if m.mesh not in face.meshes:
+                    raise ValueError(f"the FAT of FAP {table.fap} deforms mesh {m.mesh!r}, which "
+                                     f"the face does not have ({sorted(face.meshes)})")
+                problems = m.problems()
+                if problems:
+                    raise ValueError(f"FAP {table.fap} FaceDefMesh on {m.mesh}: {problems[0]}")
+                n = len(face.meshes[m.mesh].vertices)
+                if len(m.indices) and m.indices.max() >= n:
+                    raise ValueError(f"FAP {table.fap} FaceDefMesh on {m.mesh}: vertex index "
+                                     f"{int(m.indices.max())} out of range ({n} vertices)")
+                entries = per_mesh[m.mesh]
+                first = sum(e[1].n_intervals for e in entries)
+                entries.append((table, m, first))
+            for t in table.transforms:
+                if t.transform not in face.transforms:
+                    raise ValueError(f"the FAT of FAP {table.fap} drives Transform "
+                                     f"{t.transform!r}, which the face does not have")
+                self.transform_entries.setdefault(t.transform, []).append((table, t))
+        self.meshes = {name: _MeshOperator(face.meshes[name], e) for name, e in per_mesh.items()}
+        self.tables = list(face.fat)
+
+
+class Playback:
+    """The frames of a stream played on a face (computed on first access, then kept).
+
+    ``vertices(mesh)`` -> [frames, n, 3] local positions; ``transform(name)`` -> dict of
+    per-frame ``rotation`` matrices [frames, 3, 3], ``translation`` and ``scale``
+    [frames, 3]; ``world_vertices(mesh)`` puts a mesh through its animated transform
+    chain.
+    """
+
+    def __init__(self, face: FaceModel, stream: FapStream):
+        self.face = face
+        self.stream = stream
+        self.compiled = face.compile()
+        held, given, vis, exp = stream.held()
+        self.n_frames = len(stream)
+        self._values = {id(t): table_values(t, held, given, vis, exp) for t in self.compiled.tables}
+        self._vertices: dict = {}
+        self._transforms: dict = {}
+
+    def __len__(self) -> int:
+        return self.n_frames
+
+    def vertices(self, mesh: str) -> np.ndarray:
+        if mesh not in self._vertices:
+            op = self.compiled.meshes[mesh]
+            self._vertices[mesh] = op.displaced(self._values, self.n_frames)
+        return self._vertices[mesh]
+
+    def transform(self, name: str) -> dict:
+        if name not in self._transforms:
+            tr = self.face.transforms[name]
+            n = self.n_frames
+            R0 = rotation_matrices(tr.rotation[:3], [tr.rotation[3]])[0]
+            R = np.broadcast_to(R0, (n, 3, 3)).copy()
+            T = np.tile(np.asarray(tr.translation, float), (n, 1))
+            S = np.tile(np.asarray(tr.scale, float), (n, 1))
+            for table, entry in self.compiled.transform_entries.get(name, []):
+                p = self._values[id(table)]
+                if entry.field == "rotation":
+                    R = np.einsum("fij,fjk->fik", rotation_matrices(entry.rotation[:3],
+                                                                    entry.rotation[3] * p), R)
+                elif entry.field == "translation":
+                    T = T + p[:, None] * np.asarray(entry.translation)
+                else:
+                    S = S + p[:, None] * np.asarray(entry.scale)
+            self._transforms[name] = {"rotation": R, "translation": T, "scale": S}
+        return self._transforms[name]
+
+    def local_matrices(self, name: str) -> np.ndarray:
+        t = self.transform(name)
+        return self.face.transforms[name].matrices(t["rotation"], t["translation"], t["scale"])
+
+    def world_vertices(self, mesh: str) -> np.ndarray:
+        """[frames, n, 3] positions of ``mesh`` in world space, transforms animated."""
+        m = self.face.meshes[mesh]
+        local = {name: self.local_matrices(name) for name in self.face.chain(m.parent)}
+        M = self.face.world_matrix(m.parent, local)
+        M = np.broadcast_to(M, (self.n_frames, 4, 4))
+        v = self.vertices(mesh)
+        return np.einsum("fij,fnj->fni", M[:, :3, :3], v) + M[:, None, :3, 3]

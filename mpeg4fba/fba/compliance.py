@@ -20,12 +20,14 @@ Example
 """
 from __future__ import annotations
 
+import warnings
 from dataclasses import asdict, dataclass, field
 from typing import Iterable, Optional
 
 import numpy as np
 
 from .face import FaceModel
+from .fapu import FAPU
 from .tables import FAP, FEATURE_POINTS
 
 __all__ = ["Rule", "RULES", "Finding", "Report", "check_fat", "check_fap_ratios",
@@ -200,15 +202,19 @@ def check_fat(face: FaceModel) -> list:
         out.append(Finding("FBA002", f"feature point{'s' if len(missing) > 1 else ''} "
                            f"{', '.join(missing)} missing (needed by the FAT's FAPs)",
                            data={"missing": missing}, **src))
-    try:
-        fapu = face.fapu
-        problem = None if fapu is not None else "no feature points to compute it from"
-        if fapu is not None:
-            bad = [k for k, v in fapu.as_dict().items() if not v > 0]
-            if bad:
-                problem = ", ".join(f"{k} = {fapu.as_dict()[k]:g}" for k in bad)
-    except ValueError as e:
-        problem = str(e)
+    problem = None
+    fapu = face._fapu
+    if fapu is None:
+        try:
+            with warnings.catch_warnings():  # what is wrong is reported here, not warned
+                warnings.simplefilter("ignore")
+                fapu = FAPU.from_feature_points(face.points)
+        except ValueError as e:
+            problem = str(e)
+    if fapu is not None:
+        bad = [k for k, v in fapu.as_dict().items() if not v > 0]
+        if bad:
+            problem = ", ".join(f"{k} = {fapu.as_dict()[k]:g}" for k in bad) + " (not positive)"
     if problem and len(face.fat):
         out.append(Finding("FBA003", f"FAPU: {problem}", **src))
     return out

@@ -11,7 +11,9 @@ from . import vrml
 from .fba import (EXPRESSIONS, FAP, FAPU, FEATURE_POINTS, VISEMES, FapFrame, FapStream,
                   FeaturePointSet)
 from .formats.fap import read_fap, write_fap
+from .formats.wrl_face import load_face, save_face
 
 __version__ = "0.1.0"
 __all__ = ["vrml", "standard", "FAP", "FAPU", "FEATURE_POINTS", "VISEMES", "EXPRESSIONS",
-           "FapFrame", "FapStream", "FeaturePointSet", "read_fap", "write_fap", "__version__"]
+           "FapFrame", "FapStream", "FeaturePointSet", "read_fap", "write_fap", "load_face",
+           "save_face", "__version__"]

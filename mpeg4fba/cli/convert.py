@@ -3,6 +3,10 @@
 The output is gzip-compressed when its name ends in ``.gz`` or ``.wrz``, and is
 written through a temporary file, so a failure leaves no half-written file.
 
+With ``--morph-targets`` it builds a FAT-bearing face from a morph-target set instead:
+``mpeg4fba convert --morph-targets NEUTRAL TARGET... -o OUT.wrl [--mapping FILE]``
+(see :mod:`mpeg4fba.formats.morph_targets` for the file types and target names).
+
 Example
 -------
 >>> import os, tempfile
@@ -23,22 +27,49 @@ Group {
 from __future__ import annotations
 
 import os
+from typing import Optional, Sequence
 
 import click
 
 from ..vrml import dump
-from . import main, read_scene
+from . import main, read_scene, warnings_to_stderr
 
 __all__ = ["convert"]
 
 
 @main.command(epilog="\b\nExamples:\n  mpeg4fba convert face.wrl face-clean.wrl"
-                     "\n  mpeg4fba convert --lenient old.wrl face.wrl.gz")
-@click.argument("source", metavar="IN.wrl")
-@click.argument("target", metavar="OUT.wrl")
+                     "\n  mpeg4fba convert --lenient old.wrl face.wrl.gz"
+                     "\n  mpeg4fba convert --morph-targets neutral.obj open_jaw@1024.obj "
+                     "viseme_PP.obj -o face.wrl"
+                     "\n  mpeg4fba convert --morph-targets head.glb -o face.wrl --mapping names.tsv")
+@click.argument("files", nargs=-1, metavar="IN.wrl OUT.wrl | --morph-targets NEUTRAL [TARGET...] -o OUT.wrl")
+@click.option("-o", "--output", metavar="OUT.wrl", help="The file to write.")
+@click.option("--morph-targets", is_flag=True,
+              help="Build a face with a FAT from a neutral and morph targets (VRML, OBJ or glTF; "
+                   "target files named like open_jaw@1024.obj, viseme_PP.obj, expression_joy.obj).")
+@click.option("--mapping", metavar="FILE",
+              help="With --morph-targets: JSON or TSV file of file (or glTF target) name -> "
+                   "target name, for files whose names don't say what they show.")
 @click.option("--lenient", is_flag=True, help="Keep nodes and fields that are not VRML97 (warns).")
-def convert(source: str, target: str, lenient: bool) -> None:
-    """Rewrite IN.wrl as canonical VRML97 in OUT.wrl (gzipped if OUT ends in .gz or .wrz)."""
+def convert(files: tuple, output: Optional[str], morph_targets: bool, mapping: Optional[str],
+            lenient: bool) -> None:
+    """Rewrite IN.wrl as canonical VRML97 in OUT.wrl (gzipped if OUT ends in .gz or .wrz);
+    with --morph-targets, write the face that a neutral and its morph targets make."""
+    if morph_targets:
+        if not files:
+            raise click.UsageError("--morph-targets needs the neutral face and its targets")
+        if output is None:
+            raise click.UsageError("--morph-targets needs -o OUT.wrl")
+        _convert_morph_targets(files[0], files[1:], output, mapping, lenient)
+        return
+    if mapping is not None:
+        raise click.UsageError("--mapping goes with --morph-targets")
+    if output is not None:
+        files = files + (output,)
+    if len(files) != 2:
+        raise click.UsageError(f"give IN.wrl and OUT.wrl (got {len(files)} file"
+                               f"{'' if len(files) == 1 else 's'})")
+    source, target = files
     scene = read_scene(source, lenient)
     dump(scene, target)
     n_nodes = sum(1 for _ in scene)
@@ -46,3 +77,19 @@ def convert(source: str, target: str, lenient: bool) -> None:
     packed = ", gzip" if target.endswith((".gz", ".wrz")) else ""
     click.echo(f"wrote {target}: {n_nodes} nodes, {len(scene.routes)} routes, "
                f"{size} bytes{packed}")
+
+
+def _convert_morph_targets(neutral: str, targets: Sequence[str], output: str,
+                           mapping: Optional[str], lenient: bool) -> None:
+    from ..formats.morph_targets import read_morph_face
+    try:
+        from ..formats.wrl_face import save_face
+    except ImportError:  # pragma: no cover - until the FAT codec is installed
+        raise click.ClickException("writing a face needs mpeg4fba.formats.wrl_face, which "
+                                   "this installation lacks") from None
+    with warnings_to_stderr():
+        face = read_morph_face(neutral, targets, mapping=mapping, lenient=lenient)
+        save_face(face, output)
+    fat = face.fat
+    click.echo(f"wrote {output}: {len(face.meshes)} meshes, {len(fat.faps)} FAPs, "
+               f"{len(fat.visemes)} visemes, {len(fat.expressions)} expressions")

@@ -58,9 +58,10 @@ RULES = {r.code: r for r in [
     Rule("FBA014", "warning", "FAP moves its feature point off the standard's measure"),
     Rule("FBA015", "error", "not a face: no Face node"),
     Rule("FBA016", "warning", "FAP with a table that moves nothing at the test value"),
+    Rule("FBA100", "error", "face file can't be read"),
     Rule("FBA101", "error", "FAP stream file can't be read"),
     Rule("FBA102", "warning", "FAP stream value outside the standard's range"),
-    Rule("FBA103", "warning", "FAP stream frame count disagrees with its header"),
+    Rule("FBA103", "warning", "FAP stream read with a repair (frame count, numbering, columns)"),
 ]}
 
 #: The FAP value the numeric check plays each FAP at (in FAP units): large enough to

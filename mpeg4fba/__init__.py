@@ -11,9 +11,11 @@ from . import vrml
 from .fba import (EXPRESSIONS, FAP, FAPU, FEATURE_POINTS, VISEMES, FapFrame, FapStream,
                   FeaturePointSet)
 from .formats.fap import read_fap, write_fap
+from .fba.face import FaceModel
+from .formats.validate import validate
 from .formats.wrl_face import load_face, save_face
 
 __version__ = "0.1.0"
 __all__ = ["vrml", "standard", "FAP", "FAPU", "FEATURE_POINTS", "VISEMES", "EXPRESSIONS",
            "FapFrame", "FapStream", "FeaturePointSet", "read_fap", "write_fap", "load_face",
-           "save_face", "__version__"]
+           "save_face", "FaceModel", "validate", "__version__"]

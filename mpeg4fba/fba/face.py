@@ -96,7 +96,48 @@ def table_values(table: FaceDefTable, held: np.ndarray, given: np.ndarray,
 
 
 class _MeshOperator:
-    """The FaceDefMesh entries of one mesh as one sparse operator."""
+    """The FaceDefMesh entries of one mesh as one linear operator.
+
+    Columns ("slots") are the intervals of every entry; ``BT`` [3n, slots] (CSR) maps
+    interval weights to coordinate displacements.  For long streams the operator is also
+    kept in a blocked dense form: the coordinates are cut into runs of ``3 x vb``
+    consecutive ones, and each run keeps the dense rows of the few slots that touch it,
+    plus the neutral coordinates as one more row.  A run of frames is then one small
+    BLAS product per block, ``[W | 1][:, slots_b] @ D_b``, written straight into the
+    output: no [3n, frames] temporary, no transposition, one pass over the output.  A
+    mesh whose vertex order scatters the FAP regions (blocks would be mostly zeros)
+    keeps the sparse product only.
+
+    >>> t = FaceDefTable(3, [FaceDefMesh("M", [0, 10], [1, 3], [[0, 1, 0], [2, 0, 0]])])
+    >>> op = _MeshOperator(FaceMesh("M", np.ones((4, 3)), [[0, 1, 2]]), [(t, t.meshes[0], 0)])
+    >>> op.BT.shape, [(c0, c1, s.tolist(), D.shape) for c0, c1, s, D in op.blocks]
+    ((12, 1), [(0, 12, [0, 1], (2, 12))])
+    >>> op.displaced({id(t): np.array([0.0, 5.0])}, 2)[1].tolist()
+    [[1.0, 1.0, 1.0], [1.0, 6.0, 1.0], [1.0, 1.0, 1.0], [11.0, 1.0, 1.0]]
+
+    Long streams take the blocks, short ones the sparse product; both give the same:
+
+    >>> values = {id(t): np.linspace(-5.0, 20.0, 40)}
+    >>> blocked = op.displaced(values, 40)
+    >>> op.MIN_BLOCKED_FRAMES = 10 ** 9          # force the sparse product
+    >>> bool(np.allclose(blocked, op.displaced(values, 40), rtol=0, atol=1e-12))
+    True
+    """
+
+    #: Vertices per block tried at compile time, each twice the one before; the one of
+    #: least estimated cost is kept.
+    BLOCK_VERTICES = (8, 16, 32, 64, 128, 256)
+    #: Per-block overhead in the cost model, as a number of dense entries.
+    BLOCK_PENALTY = 700
+    #: Blocks are used only when their dense entries stay within this factor of the
+    #: sparse operator's (nonzeros + neutral coordinates).
+    MAX_FILL = 4.0
+    #: Streams shorter than this use the sparse product (block overheads would dominate).
+    MIN_BLOCKED_FRAMES = 16
+    #: Frames evaluated at a time (bounds the weight matrix and the gathers).
+    FRAME_CHUNK = 2048
+    #: Bytes of the [3n, frames] temporary of the sparse product, at most (about).
+    SPARSE_TEMP_BYTES = 32 << 20
 
     def __init__(self, mesh: FaceMesh, entries: list):
         self.mesh = mesh
@@ -118,19 +159,104 @@ class _MeshOperator:
         # B^T as CSR [3n, slots]: the product with W^T [slots, frames] is one sparse matmul.
         self.BT = sp.csr_matrix((d, (r, c)), shape=(n3, self.n_slots))
         self.BT.sum_duplicates()
+        self.blocks = self._blocked()
 
-    def weights(self, values: dict, n_frames: int) -> np.ndarray:
-        W = np.zeros((self.n_slots, n_frames))
+    def _blocked(self) -> Optional[list]:
+        """``[(first coordinate, end, slots, D)]`` with ``D`` [len(slots), end - first];
+        the last slot is ``n_slots``, the column of ones whose row holds the neutral
+        coordinates.  None when blocks would not pay (see the class docstring)."""
+        BT, ns = self.BT, self.n_slots
+        n3 = BT.shape[0]
+        if ns == 0 or n3 == 0 or BT.nnz == 0:
+            return None
+        rows = np.repeat(np.arange(n3), np.diff(BT.indptr))
+        # occ[b, s]: slot s touches block b, at the finest block size; coarser sizes
+        # (each twice the one before) merge pairs of rows.
+        finest = 3 * self.BLOCK_VERTICES[0]
+        occ = np.zeros((-(-n3 // finest), ns), dtype=bool)
+        occ[rows // finest, BT.indices] = True
+        best = None
+        for vb in self.BLOCK_VERTICES:
+            width = 3 * vb
+            n_blocks = -(-n3 // width)
+            if width > finest:
+                if len(occ) % 2:
+                    occ = np.vstack([occ, np.zeros((1, ns), dtype=bool)])
+                occ = occ.reshape(-1, 2, ns).any(axis=1)[:n_blocks]
+            per_block = occ.sum(axis=1) + 1
+            widths = np.minimum(width, n3 - np.arange(n_blocks) * width)
+            entries = int((per_block * widths).sum())
+            cost = entries + self.BLOCK_PENALTY * n_blocks
+            if best is None or cost < best[0]:
+                best = (cost, entries, width, n_blocks, occ, per_block, widths)
+        _, entries, width, n_blocks, occ, per_block, widths = best
+        if entries > self.MAX_FILL * (BT.nnz + n3):
+            return None
+        pairs = np.flatnonzero(occ)                  # block * ns + slot, sorted
+        # One flat buffer: block b is [per_block[b], widths[b]] at offset[b], row-major.
+        offset = np.concatenate([[0], np.cumsum(per_block * widths)])
+        start = np.concatenate([[0], np.cumsum(per_block - 1)])    # block b's first pair
+        block = rows // width
+        rank = np.cumsum(occ.ravel()) - 1            # (block, slot) -> its pair number
+        k = rank[block * ns + BT.indices] - start[block]
+        flat = np.zeros(offset[-1])
+        flat[offset[block] + k * widths[block] + rows % width] = BT.data
+        c = np.arange(n3)                                          # the neutral row, last
+        cb = c // width
+        flat[offset[cb] + (per_block[cb] - 1) * widths[cb] + c % width] = \
+            self.mesh.vertices.reshape(-1)
+        slots = np.split(pairs % ns, start[1:-1])
+        out = []
+        for b in range(n_blocks):
+            D = flat[offset[b]:offset[b + 1]].reshape(per_block[b], widths[b])
+            out.append((b * width, b * width + int(widths[b]), np.append(slots[b], ns), D))
+        return out
+
+    def frame_weights(self, values: dict, f0: int, f1: int) -> np.ndarray:
+        """Interval weights of frames ``f0:f1`` as [frames, slots + 1]; the last column
+        is 1 (it picks the neutral row of the blocks).  FAPs that stay at 0 are skipped."""
+        W = np.zeros((f1 - f0, self.n_slots + 1))
+        W[:, -1] = 1.0
         for table, m, first in self.entries:
-            W[first:first + m.n_intervals] = interval_weights(m.borders, values[id(table)]).T
+            p = values[id(table)][f0:f1]
+            if p.any():
+                W[:, first:first + m.n_intervals] = interval_weights(m.borders, p)
         return W
 
+    def weights(self, values: dict, n_frames: int) -> np.ndarray:
+        """Interval weights [slots, frames] of the whole stream."""
+        return self.frame_weights(values, 0, n_frames)[:, :-1].T
+
     def displaced(self, values: dict, n_frames: int) -> np.ndarray:
+        """Vertex positions [frames, n, 3], into one preallocated array, a chunk of
+        frames at a time."""
         base = self.mesh.vertices
-        if self.n_slots == 0:
-            return np.broadcast_to(base, (n_frames,) + base.shape).copy()
-        D = self.BT @ self.weights(values, n_frames)           # [3n, frames]
-        return base[None] + D.T.reshape(n_frames, -1, 3)
+        out = np.empty((n_frames,) + base.shape)
+        if self.n_slots == 0 or n_frames == 0:
+            out[...] = base
+            return out
+        flat = out.reshape(n_frames, -1)
+        b = base.reshape(-1)
+        blocked = self.blocks is not None and n_frames >= self.MIN_BLOCKED_FRAMES
+        step = max(1, self.SPARSE_TEMP_BYTES // (8 * max(len(b), 1)))
+        for f0 in range(0, n_frames, self.FRAME_CHUNK):
+            f1 = min(n_frames, f0 + self.FRAME_CHUNK)
+            W = self.frame_weights(values, f0, f1)
+            if blocked:
+                active = W.any(axis=0)
+                everything = active.all()
+                for c0, c1, slots, D in self.blocks:
+                    if not everything:          # drop the rows of FAPs at 0 throughout
+                        keep = active[slots]
+                        slots, D = slots[keep], D[keep]
+                    np.matmul(W[:, slots], D, out=flat[f0:f1, c0:c1])
+                continue
+            WT = np.ascontiguousarray(W[:, :-1].T)                  # [slots, frames]
+            for g0 in range(0, f1 - f0, step):
+                g1 = min(f1 - f0, g0 + step)
+                Y = self.BT @ WT[:, g0:g1]                            # [3n, frames]
+                np.add(Y.T, b, out=flat[f0 + g0:f0 + g1])
+        return out
 
 
 class FaceModel:

@@ -1,11 +1,13 @@
 """FaceModel: a face's meshes in their transform tree, its feature points, FAPU and FAT;
 and playback of FAP streams on it.
 
-Playback compiles the FAT once into one sparse operator per mesh (rows: the intervals
-of every FaceDefMesh touching the mesh; columns: vertex coordinates), so a whole stream
-is one sparse product per mesh: ``displacements[frames, 3n] = W[frames, slots] @ B``,
-where W holds each frame's interval weights.  Transforms are composed per frame with
-vectorised Rodrigues rotations.
+Playback compiles the FAT once into one linear operator per mesh (rows: the intervals
+of every FaceDefMesh touching the mesh; columns: vertex coordinates), so a stream is a
+product per mesh: ``vertices[frames, 3n] = neutral + W[frames, slots] @ B``, where W
+holds each frame's interval weights.  Long streams use a blocked dense form of B (small
+BLAS products written straight into one preallocated output, a chunk of frames at a
+time), short ones the sparse B (see :class:`_MeshOperator`).  Transforms are composed
+per frame with vectorised Rodrigues rotations.
 
 Example
 -------
@@ -122,6 +124,10 @@ class _MeshOperator:
     >>> op.MIN_BLOCKED_FRAMES = 10 ** 9          # force the sparse product
     >>> bool(np.allclose(blocked, op.displaced(values, 40), rtol=0, atol=1e-12))
     True
+    >>> op.MIN_BLOCKED_FRAMES = 16
+    >>> op.mesh.vertices += 1                      # edited in place: still followed
+    >>> bool(np.allclose(op.displaced(values, 40), blocked + 1, rtol=0, atol=1e-12))
+    True
     """
 
     #: Vertices per block tried at compile time, each twice the one before; the one of
@@ -203,8 +209,10 @@ class _MeshOperator:
         flat[offset[block] + k * widths[block] + rows % width] = BT.data
         c = np.arange(n3)                                          # the neutral row, last
         cb = c // width
-        flat[offset[cb] + (per_block[cb] - 1) * widths[cb] + c % width] = \
-            self.mesh.vertices.reshape(-1)
+        self._neutral_at = offset[cb] + (per_block[cb] - 1) * widths[cb] + c % width
+        self._neutral = self.mesh.vertices.reshape(-1).copy()
+        flat[self._neutral_at] = self._neutral
+        self._flat = flat
         slots = np.split(pairs % ns, start[1:-1])
         out = []
         for b in range(n_blocks):
@@ -238,6 +246,10 @@ class _MeshOperator:
         flat = out.reshape(n_frames, -1)
         b = base.reshape(-1)
         blocked = self.blocks is not None and n_frames >= self.MIN_BLOCKED_FRAMES
+        if blocked and not np.array_equal(self._neutral, b):
+            # The neutral vertices were edited in place since compiling: take them up.
+            self._neutral = b.copy()
+            self._flat[self._neutral_at] = self._neutral
         step = max(1, self.SPARSE_TEMP_BYTES // (8 * max(len(b), 1)))
         for f0 in range(0, n_frames, self.FRAME_CHUNK):
             f1 = min(n_frames, f0 + self.FRAME_CHUNK)

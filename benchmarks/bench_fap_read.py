@@ -38,7 +38,7 @@ REPO = Path(__file__).resolve().parents[1]
 if str(REPO) not in sys.path:
     sys.path.insert(0, str(REPO))  # benchmark this working tree, not an installed copy
 
-from benchmarks.timing import best_of  # noqa: E402
+from benchmarks.timing import best_of, profile_top  # noqa: E402
 
 import numpy as np  # noqa: E402
 
@@ -90,16 +90,6 @@ def to_crlf(path: Path) -> None:
     """Rewrite a file with Xface's line ends: a trailing space, then CRLF."""
     data = path.read_bytes().replace(b"\n", b" \r\n")
     path.write_bytes(data)
-
-
-def profile_top(fn: Callable, n: int = 12) -> str:
-    prof = cProfile.Profile()
-    prof.enable()
-    fn()
-    prof.disable()
-    s = io.StringIO()
-    pstats.Stats(prof, stream=s).sort_stats("tottime").print_stats(n)
-    return s.getvalue()
 
 
 def main(argv=None) -> int:

@@ -50,7 +50,7 @@ REPO = Path(__file__).resolve().parents[1]
 if str(REPO) not in sys.path:
     sys.path.insert(0, str(REPO))  # benchmark this working tree, not an installed copy
 
-from benchmarks.timing import best_of  # noqa: E402
+from benchmarks.timing import best_of, profile_top  # noqa: E402
 
 import numpy as np  # noqa: E402
 import scipy  # noqa: E402
@@ -226,16 +226,6 @@ def check_against_fat(face: FaceModel, stream: FapStream, frames: int = 32) -> N
         if not np.allclose(got[f], want, rtol=0, atol=1e-9):
             raise SystemExit(f"frame {f}: playback differs from the FAT by "
                              f"{np.abs(got[f] - want).max():g}")
-
-
-def profile_top(fn: Callable, n: int = 12) -> str:
-    prof = cProfile.Profile()
-    prof.enable()
-    fn()
-    prof.disable()
-    s = io.StringIO()
-    pstats.Stats(prof, stream=s).sort_stats("tottime").print_stats(n)
-    return s.getvalue()
 
 
 def main(argv=None) -> int:

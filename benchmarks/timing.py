@@ -1,7 +1,10 @@
 """What every benchmark here shares: best-of timing."""
 from __future__ import annotations
 
+import cProfile
 import gc
+import io
+import pstats
 import time
 from typing import Callable
 
@@ -17,3 +20,14 @@ def best_of(fn: Callable, reps: int) -> tuple:
         result = fn()
         best = min(best, time.perf_counter() - t0)
     return best, result
+
+
+def profile_top(fn: Callable, n: int = 12) -> str:
+    """The ``n`` functions with the most own time in one call of ``fn``."""
+    prof = cProfile.Profile()
+    prof.enable()
+    fn()
+    prof.disable()
+    out = io.StringIO()
+    pstats.Stats(prof, stream=out).sort_stats("tottime").print_stats(n)
+    return out.getvalue()

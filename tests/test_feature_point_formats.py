@@ -329,7 +329,7 @@ def test_wrong_point_count_names_the_node_location(tmp_path):
 
 
 @pytest.mark.parametrize("scene, message", [
-    (Scene([Node("Transform")]), "the scene has no Face node"),
+    (Scene([Node("Transform")]), "no MPEG-4 Face node in the scene"),
     (Scene([Node("Face", name="F")]), "Face 'F' has no fdp"),
     (Scene([Node("Face", fdp=Node("FDP"))]), "FDP has no featurePointsCoord"),
     (Scene([Node("Face", name="A"), Node("Face", name="B")]),

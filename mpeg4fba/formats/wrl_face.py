@@ -107,7 +107,7 @@ from ..vrml.scene import ExternProto, Node, Proto, Scene, iter_nodes
 from ..vrml.walk import fan_triangulate
 from ..vrml.writer import dump
 from .errors import FormatError
-from .wrl_fdp import fdp_coordinate, feature_points_from_fdp
+from .wrl_fdp import fdp_coordinate, feature_points_from_fdp, find_face
 
 __all__ = ["face_from_scene", "load_face", "scene_from_face", "save_face", "where",
            "face_protos", "FACE_NODES", "UNSET", "GRAPH_NAME"]
@@ -308,28 +308,6 @@ class _GraphReader:
 
 # -- reading --------------------------------------------------------------------------------
 
-def _find_face(scene: Scene, face: Optional[str], path: Optional[str]) -> Node:
-    faces = [n for n in scene if n.type == "Face"]
-    if face is not None:
-        named = [n for n in faces if n.name == face]
-        if not named:
-            names = [n.name for n in faces if n.name]
-            raise FormatError(f"no Face node DEF'd as {face!r}"
-                              + (f" (the scene's Faces: {', '.join(names)})" if names
-                                 else f" (the scene has {len(faces)} Face node"
-                                      f"{'' if len(faces) == 1 else 's'}, none named)"), path)
-        faces = named
-    if not faces:
-        roots = ", ".join(sorted({n.type for n in scene.nodes})) or "nothing"
-        raise FormatError(f"no MPEG-4 Face node in the scene (root nodes: {roots}); a face "
-                          "file holds Face { fdp FDP { ... } }", path)
-    if len(faces) > 1:
-        names = [n.name or "(no DEF name)" for n in faces]
-        raise FormatError(f"the scene has {len(faces)} Face nodes ({', '.join(names)}); say "
-                          "which with face=<DEF name>", **_at(faces[1], path))
-    return faces[0]
-
-
 def _read_fat(fdp: Node, graph: _GraphReader, path: Optional[str], nodes: dict) -> FAT:
     fat = FAT()
     for tnode in _nodes(fdp["faceDefTables"]):
@@ -420,7 +398,7 @@ def face_from_scene(scene: Scene, path: Optional[str] = None, face: Optional[str
     no MPEG-4 Face node in the scene (root nodes: Group); a face file holds Face { fdp FDP { ... } }
     """
     path = path if path is not None else getattr(scene, "path", None)
-    face_node = _find_face(scene, face, path)
+    face_node = find_face(scene, face, path)
     face_node = _require(face_node, "Face", "the Face node", path, face_node)
     fdp = face_node["fdp"]
     if fdp is None:

@@ -125,6 +125,30 @@ def fdp_coordinate(points: FeaturePointSet) -> Node:
     return Node("Coordinate", point=out)
 
 
+def find_face(scene: Scene, face: Optional[str] = None, path: Optional[str] = None) -> Node:
+    """The scene's Face node (the one DEF'd ``face`` when given; needed only when the
+    scene has several).  FormatError when there is none, or several and no name."""
+    faces = [n for n in scene if n.type == "Face"]
+    if face is not None:
+        named = [n for n in faces if n.name == face]
+        if not named:
+            names = [n.name for n in faces if n.name]
+            raise FormatError(f"no Face node DEF'd as {face!r}"
+                              + (f" (the scene's Faces: {', '.join(names)})" if names
+                                 else f" (the scene has {len(faces)} Face node"
+                                      f"{'' if len(faces) == 1 else 's'}, none named)"), path)
+        faces = named
+    if not faces:
+        roots = ", ".join(sorted({n.type for n in scene.nodes})) or "nothing"
+        raise FormatError(f"no MPEG-4 Face node in the scene (root nodes: {roots}); a face "
+                          "file holds Face { fdp FDP { ... } }", path)
+    if len(faces) > 1:
+        names = [n.name or "(no DEF name)" for n in faces]
+        raise FormatError(f"the scene has {len(faces)} Face nodes ({', '.join(names)}); say "
+                          "which with face=<DEF name>", **_where(faces[1], path))
+    return faces[0]
+
+
 def feature_points_from_scene(scene: Scene, face: Optional[str] = None) -> FeaturePointSet:
     """The feature points of the scene's Face node (its ``fdp.featurePointsCoord``).
 
@@ -133,22 +157,7 @@ def feature_points_from_scene(scene: Scene, face: Optional[str] = None) -> Featu
     featurePointsCoord.
     """
     path = getattr(scene, "path", None)
-    faces = [n for n in scene if n.type == "Face"]
-    if face is not None:
-        named = [n for n in faces if n.name == face]
-        if not named:
-            names = [n.name for n in faces if n.name]
-            raise FormatError(f"no Face node DEF'd as {face!r}"
-                              + (f" (the scene's Faces: {', '.join(names)})" if names else ""),
-                              path)
-        faces = named
-    if not faces:
-        raise FormatError("the scene has no Face node, so no FDP with feature points", path)
-    if len(faces) > 1:
-        names = [n.name or "(no DEF name)" for n in faces]
-        raise FormatError(f"the scene has {len(faces)} Face nodes ({', '.join(names)}); "
-                          "say which with face=<DEF name>", path)
-    node = faces[0]
+    node = find_face(scene, face, path)
     fdp = node["fdp"]
     if fdp is None:
         raise FormatError(f"{_describe(node)} has no fdp (FDP node), so no feature points",

@@ -70,14 +70,7 @@ def feature_points_from_fdp(fdp_node: Node, path: Optional[str] = None) -> Featu
     """
     if fdp_node.type != "FDP":
         raise FormatError(f"{_describe(fdp_node)} is not an FDP node", **_where(fdp_node, path))
-    coord = fdp_node["featurePointsCoord"]
-    if coord is None:
-        raise FormatError(f"{_describe(fdp_node)} has no featurePointsCoord",
-                          **_where(fdp_node, path))
-    if not isinstance(coord, Node) or coord.type != "Coordinate":
-        what = _describe(coord) if isinstance(coord, Node) else repr(coord)
-        raise FormatError(f"FDP.featurePointsCoord is {what}, not a Coordinate",
-                          **_where(coord if isinstance(coord, Node) else fdp_node, path))
+    coord = _child(fdp_node, "featurePointsCoord", "Coordinate", path)
     where = _where(coord if coord.location is not None else fdp_node, path)
     raw = coord["point"]
     try:
@@ -158,12 +151,17 @@ def feature_points_from_scene(scene: Scene, face: Optional[str] = None) -> Featu
     """
     path = getattr(scene, "path", None)
     node = find_face(scene, face, path)
-    fdp = node["fdp"]
-    if fdp is None:
-        raise FormatError(f"{_describe(node)} has no fdp (FDP node), so no feature points",
-                          **_where(node, path))
-    if not isinstance(fdp, Node) or fdp.type != "FDP":
-        what = _describe(fdp) if isinstance(fdp, Node) else repr(fdp)
-        raise FormatError(f"{_describe(node)}.fdp is {what}, not an FDP node",
-                          **_where(node, path))
+    fdp = _child(node, "fdp", "FDP", path, " (FDP node), so no feature points")
     return feature_points_from_fdp(fdp, path)
+
+
+def _child(node: Node, field: str, type_name: str, path: Optional[str], why: str = "") -> Node:
+    """``node[field]``, which must be a ``type_name`` node; FormatError saying what it is."""
+    value = node[field]
+    if value is None:
+        raise FormatError(f"{_describe(node)} has no {field}{why}", **_where(node, path))
+    if not isinstance(value, Node) or value.type != type_name:
+        what = _describe(value) if isinstance(value, Node) else repr(value)
+        raise FormatError(f"{_describe(node)}.{field} is {what}, not a {type_name}",
+                          **_where(value if isinstance(value, Node) else node, path))
+    return value

@@ -932,6 +932,12 @@ def load(path: Union[str, os.PathLike], strict: bool = True):
     'Shape'
     """
     data = read_bytes(path)
+    head = data[3:80] if data.startswith(b"\xef\xbb\xbf") else data[:80]
+    if not head.startswith(b"#"):
+        # Say so before decoding: a binary or foreign file gets one clear line.
+        shown = "".join(chr(b) if 32 <= b < 127 else f"\\x{b:02x}" for b in head[:24])
+        raise VRMLError(f"not a VRML97 file: it starts with '{shown}', not '#VRML V2.0 utf8'",
+                        str(path), 1, 1)
     text = _decode(data, str(path))
     del data  # the text is all we need from here: halves peak memory on big files
     return loads(text, strict=strict, path=str(path))

@@ -1,0 +1,316 @@
+"""PNG previews of faces: a small software renderer on matplotlib's Agg backend.
+
+No OpenGL, no window: the meshes of a :class:`~mpeg4fba.fba.face.FaceModel` (neutral,
+posed or one frame of a playback) are put through their transform chain, seen through a
+perspective camera, sorted back to front (painter's algorithm) and drawn as one
+``PolyCollection`` of triangles, each shaded with Lambert's law: per vertex and averaged
+over the triangle ("gouraud", the default: smooth), or per triangle ("flat").
+
+Colours: a colour per mesh, picked from its name (skin, eyes, teeth, tongue, hair,
+mouth...) unless ``colors`` gives one, or a colour per vertex (an ``[n, 3]`` array):
+the procedural reference head carries such arrays in ``face.colors`` for its lips,
+brows, irises and gums, and they are used when present.
+
+Example
+-------
+>>> from mpeg4fba.fba.face import FaceMesh, FaceModel
+>>> quad = FaceMesh("Skin", [[-1, -1, 0], [1, -1, 0], [1, 1, 0], [-1, 1, 0]], [[0, 1, 2], [0, 2, 3]])
+>>> image = render_face(FaceModel([quad]), size=(64, 48))
+>>> image.shape, image.dtype.name
+((48, 64, 3), 'uint8')
+>>> bool((image[24, 32] != image[0, 0]).any())      # the quad covers the centre
+True
+"""
+from __future__ import annotations
+
+import os
+import tempfile
+from pathlib import Path
+from typing import Mapping, Optional, Sequence, Union
+
+import numpy as np
+
+__all__ = ["render_face", "render_grid", "save_png", "mesh_color", "VIEWS"]
+
+#: Camera yaw (degrees, about the face's up axis) and pitch of each named view.
+VIEWS = {"front": (0.0, 0.0), "three-quarter": (35.0, 8.0), "profile": (90.0, 0.0)}
+
+_BACKGROUND = (0.93, 0.94, 0.96)
+# Colour of a mesh by a word in its name (first match wins).
+_NAMED_COLORS = (
+    ("pupil", (0.05, 0.05, 0.06)), ("iris", (0.27, 0.40, 0.52)), ("eye", (0.95, 0.94, 0.91)),
+    ("teeth", (0.95, 0.93, 0.86)), ("tooth", (0.95, 0.93, 0.86)), ("tongue", (0.80, 0.40, 0.42)),
+    ("mouth", (0.30, 0.07, 0.09)), ("cavity", (0.30, 0.07, 0.09)), ("lip", (0.76, 0.42, 0.42)),
+    ("hair", (0.25, 0.17, 0.11)), ("brow", (0.25, 0.17, 0.11)), ("gum", (0.80, 0.45, 0.45)),
+)
+_SKIN = (0.91, 0.74, 0.63)
+_FILL = np.array([0.35, -0.45, 0.82]) / np.linalg.norm([0.35, -0.45, 0.82])   # from below right
+
+
+def mesh_color(name: str) -> tuple:
+    """The default RGB colour (0-1) of a mesh, from a word in its name.
+
+    >>> mesh_color("LeftEyeball"), mesh_color("Skin") == mesh_color("face")
+    ((0.95, 0.94, 0.91), True)
+    """
+    low = name.lower()
+    for word, rgb in _NAMED_COLORS:
+        if word in low:
+            return rgb
+    return _SKIN
+
+
+def _pose_arrays(face, frames, frame: int) -> dict:
+    """World vertices of every mesh: neutral (None), a playback, a stream or a pose dict."""
+    from ..fba.face import Playback
+    from ..fba.stream import FapStream
+    if frames is None:
+        return {name: face.world_vertices(name) for name in face.meshes}
+    if isinstance(frames, FapStream):
+        frames = face.play(frames)
+    elif isinstance(frames, Mapping):
+        frames = face.pose(frames)
+    if not isinstance(frames, Playback):
+        raise TypeError("frames is None (neutral), a {fap: value} pose, a FapStream or a "
+                        f"Playback, not {type(frames).__name__}")
+    if not -len(frames) <= frame < len(frames):
+        raise IndexError(f"frame {frame} of a playback of {len(frames)} frames")
+    return {name: frames.world_vertices(name)[frame] for name in face.meshes}
+
+
+def _camera(yaw: float, pitch: float) -> np.ndarray:
+    """World-to-camera rotation: the camera looks at the face from ``yaw`` degrees to the
+    face's left and ``pitch`` degrees above."""
+    a, b = np.radians(yaw), np.radians(pitch)
+    ry = np.array([[np.cos(a), 0, -np.sin(a)], [0, 1, 0], [np.sin(a), 0, np.cos(a)]])
+    rx = np.array([[1, 0, 0], [0, np.cos(b), -np.sin(b)], [0, np.sin(b), np.cos(b)]])
+    return rx @ ry
+
+
+def _vertex_normals(v: np.ndarray, tri: np.ndarray) -> np.ndarray:
+    """Area-weighted vertex normals (unit; zero for unused vertices)."""
+    fn = np.cross(v[tri[:, 1]] - v[tri[:, 0]], v[tri[:, 2]] - v[tri[:, 0]])
+    n = np.zeros_like(v)
+    for k in range(3):
+        np.add.at(n, tri[:, k], fn)
+    length = np.linalg.norm(n, axis=1, keepdims=True)
+    return n / np.where(length > 0, length, 1.0)
+
+
+def render_face(face, frames=None, *, frame: int = 0, size: Sequence[int] = (480, 560),
+                view: Union[str, tuple] = "front", colors: Optional[Mapping] = None,
+                shading: str = "gouraud", background: Sequence[float] = _BACKGROUND,
+                light: Sequence[float] = (-0.45, 0.55, 0.70), fit=None, cull: bool = True,
+                hide: Sequence[str] = ()) -> np.ndarray:
+    """Render a face to an RGB image ``[h, w, 3]`` (uint8).
+
+    ``frames`` is None (the neutral face), a ``{fap: value}`` pose, a FapStream or a
+    Playback (``frame`` picks its frame).  ``view`` is "front", "three-quarter",
+    "profile" or a (yaw, pitch) pair in degrees.  ``colors`` maps mesh names to an RGB
+    colour or a per-vertex ``[n, 3]`` array (default: ``face.colors`` where the face has
+    them, else a colour from the mesh's name).  The camera frames the neutral face, so
+    poses of one face line up; ``fit`` may give the box ``(lo, hi)`` to frame instead.
+    ``cull`` drops triangles facing away from the camera (meshes wound outward, as
+    VRML's ``ccw TRUE``); ``hide`` names meshes not to draw.
+    """
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.collections import PolyCollection
+    from matplotlib.figure import Figure
+
+    w, h = (int(s) for s in size)
+    if isinstance(view, str):
+        if view not in VIEWS:
+            raise ValueError(f"view is one of {', '.join(VIEWS)} or (yaw, pitch), not {view!r}")
+        yaw, pitch = VIEWS[view]
+    else:
+        yaw, pitch = (float(a) for a in view)
+    if shading not in ("gouraud", "flat"):
+        raise ValueError(f"shading is 'gouraud' or 'flat', not {shading!r}")
+    world = _pose_arrays(face, frames, frame)
+    palette = dict(getattr(face, "colors", None) or {})
+    palette.update(colors or {})
+    R = _camera(yaw, pitch)
+    # Frame the neutral face (all meshes), seen from this camera.
+    if fit is None:
+        neutral = np.concatenate([face.world_vertices(m) for m in face.meshes
+                                  if len(face.meshes[m].vertices)] or [np.zeros((1, 3))])
+        lo, hi = neutral.min(axis=0), neutral.max(axis=0)
+    else:
+        lo, hi = (np.asarray(b, float) for b in fit)
+    centre = (lo + hi) / 2
+    corners = np.array(np.meshgrid(*zip(lo, hi))).reshape(3, -1).T
+    cam_pts = (corners - centre) @ R.T
+    radius = float(np.linalg.norm(hi - lo)) / 2 or 1.0
+    dist = 3.2 * radius
+    light_dir = np.asarray(light, float)
+    light_dir = light_dir / np.linalg.norm(light_dir)
+    light_cam = light_dir           # given in the camera frame: every view is lit alike
+    polys, shades, depths = [], [], []
+    for name, mesh in face.meshes.items():
+        if name in hide or not len(mesh.triangles):
+            continue
+        v = (world[name] - centre) @ R.T                         # camera frame, +z to viewer
+        tri = mesh.triangles
+        fn = np.cross(v[tri[:, 1]] - v[tri[:, 0]], v[tri[:, 2]] - v[tri[:, 0]])
+        fl = np.linalg.norm(fn, axis=1)
+        ok = fl > 0
+        fn = fn / np.where(ok, fl, 1.0)[:, None]
+        depth = dist - v[:, 2]                                    # distance along the axis
+        if (depth <= 0).any():
+            raise ValueError("the camera is inside the face; give a larger fit box")
+        proj = v[:, :2] * (dist / depth)[:, None]                 # perspective divide
+        # facing the camera: the projected triangle turns counter-clockwise
+        p = proj[tri]
+        area = ((p[:, 1, 0] - p[:, 0, 0]) * (p[:, 2, 1] - p[:, 0, 1])
+                - (p[:, 2, 0] - p[:, 0, 0]) * (p[:, 1, 1] - p[:, 0, 1]))
+        keep = ok & (area > 0) if cull else ok
+        if not keep.any():
+            continue
+        col = np.asarray(palette.get(name, mesh_color(name)), dtype=float)
+        vcol = np.broadcast_to(col[:3], (len(v), 3)) if col.ndim == 1 else col[:, :3]
+        if shading == "gouraud":
+            vn = _vertex_normals(v, tri)
+            lam = vn @ light_cam
+            lam = np.abs(lam) if not cull else np.clip(lam, 0.0, 1.0)
+            fill = np.clip(vn @ _FILL, 0.0, 1.0)
+            lit = vcol * (0.30 + 0.58 * lam + 0.22 * fill)[:, None]
+            spec = np.clip(vn @ _half_vector(light_cam), 0, 1) ** 24 * 0.08
+            corner = np.clip(lit + spec[:, None], 0, 1)[tri]      # [m, 3, 3]
+        else:
+            lam = np.clip(np.abs(fn @ light_cam) if not cull else fn @ light_cam, 0, 1)
+            fill = np.clip(fn @ _FILL, 0.0, 1.0)
+            flat = vcol[tri].mean(axis=1) * (0.30 + 0.58 * lam + 0.22 * fill)[:, None]
+            corner = np.repeat(flat[:, None, :], 3, axis=1)
+        polys.append(p[keep])
+        shades.append(corner[keep])
+        depths.append(depth[tri[keep]].mean(axis=1))
+    fig = Figure(figsize=(w / 100.0, h / 100.0), dpi=100)
+    canvas = FigureCanvasAgg(fig)
+    ax = fig.add_axes((0, 0, 1, 1))
+    ax.set_axis_off()
+    fig.patch.set_facecolor(tuple(background))
+    proj_box = cam_pts[:, :2] * (dist / (dist - cam_pts[:, 2]))[:, None]
+    half = np.abs(proj_box).max(axis=0) * 1.06
+    aspect = w / h
+    half_w, half_h = max(half[0], half[1] * aspect), max(half[1], half[0] / aspect)
+    ax.set_xlim(-half_w, half_w)
+    ax.set_ylim(-half_h, half_h)
+    if polys:
+        P = np.concatenate(polys)
+        C = np.concatenate(shades)
+        order = np.argsort(-np.concatenate(depths), kind="stable")    # far ones first
+        P, C = P[order], C[order]
+        if shading == "gouraud":
+            _gouraud(ax, P, C)
+        else:
+            coll = PolyCollection(P, facecolors=C[:, 0], edgecolors=C[:, 0],
+                                  linewidths=0.3, antialiaseds=False)
+            ax.add_collection(coll)
+    canvas.draw()
+    image = np.asarray(canvas.buffer_rgba())[:, :, :3].copy()
+    return image
+
+
+def _gouraud(ax, P: np.ndarray, C: np.ndarray) -> None:
+    """Draw triangles ``P`` [m, 3, 2] in order with colours ``C`` [m, 3, 3] interpolated
+    across each (Agg's Gouraud triangles), after a thin flat outline of each that hides
+    the hairline cracks between neighbours."""
+    from matplotlib.collections import PolyCollection, TriMesh
+    from matplotlib.tri import Triangulation
+
+    m = len(P)
+    mean = C.mean(axis=1)
+    ax.add_collection(PolyCollection(P, facecolors=mean, edgecolors=mean, linewidths=0.6,
+                                     antialiaseds=False, zorder=1))
+    # chunks keep the painter's order within and between them
+    for k0 in range(0, m, 20000):
+        k1 = min(m, k0 + 20000)
+        xy = P[k0:k1].reshape(-1, 2)
+        tri = Triangulation(xy[:, 0], xy[:, 1], np.arange(len(xy)).reshape(-1, 3))
+        mesh = TriMesh(tri, zorder=2 + k0 / m)
+        rgba = np.concatenate([C[k0:k1].reshape(-1, 3), np.ones((len(xy), 1))], axis=1)
+        mesh.set_facecolor(rgba)
+        mesh.set_edgecolor("none")
+        ax.add_collection(mesh)
+
+
+def _half_vector(light: np.ndarray) -> np.ndarray:
+    hv = light + np.array([0.0, 0.0, 1.0])
+    return hv / np.linalg.norm(hv)
+
+
+def render_grid(images: Sequence[np.ndarray], labels: Optional[Sequence[str]] = None,
+                cols: int = 4, *, background: Sequence[float] = (1.0, 1.0, 1.0),
+                label_size: float = 11.0) -> np.ndarray:
+    """Tile images (all of one size) in ``cols`` columns, each with its label below it,
+    into one RGB image.
+
+    >>> tile = np.zeros((20, 30, 3), np.uint8)
+    >>> render_grid([tile, tile, tile], ["a", "b", "c"], cols=2).shape[:2]
+    (80, 60)
+    """
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    if not len(images):
+        raise ValueError("no images to tile")
+    h, w = images[0].shape[:2]
+    if any(im.shape[:2] != (h, w) for im in images):
+        raise ValueError("the images of a grid must all have one size")
+    labels = list(labels) if labels is not None else [""] * len(images)
+    if len(labels) != len(images):
+        raise ValueError(f"{len(labels)} labels for {len(images)} images")
+    cols = max(1, min(int(cols), len(images)))
+    rows = -(-len(images) // cols)
+    label_h = int(round(label_size * 1.8)) if any(labels) else 0
+    W, H = cols * w, rows * (h + label_h)
+    fig = Figure(figsize=(W / 100.0, H / 100.0), dpi=100)
+    canvas = FigureCanvasAgg(fig)
+    fig.patch.set_facecolor(tuple(background))
+    for k, (im, text) in enumerate(zip(images, labels)):
+        r, c = divmod(k, cols)
+        top = 1.0 - r * (h + label_h) / H
+        ax = fig.add_axes((c * w / W, top - h / H, w / W, h / H))
+        ax.imshow(im, interpolation="nearest")
+        ax.set_axis_off()
+        if text:
+            fig.text((c + 0.5) * w / W, top - (h + label_h * 0.55) / H, text, ha="center",
+                     va="center", fontsize=label_size, color=(0.1, 0.1, 0.1))
+    canvas.draw()
+    return np.asarray(canvas.buffer_rgba())[:, :, :3].copy()
+
+
+def _umask() -> int:
+    mask = os.umask(0)
+    os.umask(mask)
+    return mask
+
+
+def save_png(path: Union[str, os.PathLike], image: np.ndarray) -> Path:
+    """Write an RGB(A) uint8 image as PNG, atomically (a temporary file beside it, then a
+    rename), and return the path.
+
+    >>> import tempfile, os
+    >>> with tempfile.TemporaryDirectory() as d:
+    ...     p = save_png(os.path.join(d, "x.png"), np.zeros((4, 5, 3), np.uint8))
+    ...     p.read_bytes()[:4]
+    b'\\x89PNG'
+    """
+    from matplotlib import image as mimage
+
+    path = Path(path)
+    image = np.asarray(image)
+    if image.ndim != 3 or image.shape[2] not in (3, 4):
+        raise ValueError(f"an image is [h, w, 3] or [h, w, 4], not {image.shape}")
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    try:
+        with os.fdopen(fd, "wb") as f:
+            mimage.imsave(f, image, format="png")
+        os.chmod(tmp, 0o666 & ~_umask())              # as an ordinary new file would be
+        os.replace(tmp, path)
+    except BaseException:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+        raise
+    return path

@@ -276,6 +276,9 @@ class FaceModel:
 
     ``fapu`` defaults to the one computed from ``points`` when those have the points it
     needs.  ``play(stream)`` evaluates a FAP stream; ``compile()`` is done once and kept.
+    Optional extras: ``colors`` (mesh name -> [n, 3] RGB per vertex, for pictures) and
+    ``regions`` (name -> vertex indices of named areas, e.g. the lips), both empty by
+    default and not stored in VRML.
     """
 
     def __init__(self, meshes: Iterable[FaceMesh] = (), transforms: Iterable[FaceTransform] = (),
@@ -286,6 +289,8 @@ class FaceModel:
         self.points = points if points is not None else FeaturePointSet()
         self.fat = fat if fat is not None else FAT()
         self.name = name
+        self.colors: dict = {}
+        self.regions: dict = {}
         self._fapu = fapu
         self._compiled = None
         for m in self.meshes.values():

@@ -20,6 +20,10 @@ def test_wheel_contains_grammar_and_catalogue(tmp_path):
     names = set(zipfile.ZipFile(wheel).namelist())
     assert "mpeg4fba/grammars/vrml97.lark" in names
     assert "mpeg4fba/vrml/data/nodes.tsv" in names
+    # Every subpackage of the source tree is in the wheel (the package list is explicit).
+    for init in (repo / "mpeg4fba").rglob("__init__.py"):
+        rel = init.relative_to(repo).as_posix()
+        assert rel in names, f"{rel} is missing from the wheel: add it to pyproject's packages"
     with zipfile.ZipFile(wheel) as z:
         assert z.read("mpeg4fba/grammars/vrml97.lark") == (repo / "grammars" / "vrml97.lark").read_bytes()
 

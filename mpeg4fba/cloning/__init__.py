@@ -6,5 +6,9 @@ paper's anti-aliasing filter (:mod:`mpeg4fba.cloning.interp2d`).
 from __future__ import annotations
 
 from .interp2d import antialiased_weights, interpolate, interpolation_weights
+from .normalise import Normaliser, face_center, point_units, region_factors
+from .projection import MOUTH_ANGLE, Projection, choose_axis, cylindrical_projection
 
-__all__ = ["interpolation_weights", "interpolate", "antialiased_weights"]
+__all__ = ["interpolation_weights", "interpolate", "antialiased_weights",
+           "Normaliser", "face_center", "point_units", "region_factors",
+           "Projection", "choose_axis", "cylindrical_projection", "MOUTH_ANGLE"]

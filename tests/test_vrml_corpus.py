@@ -63,24 +63,23 @@ def test_all_positives_accepted(corpus_manifest, corpus_dir):
 
 # -- negative -----------------------------------------------------------------------------
 
-@pytest.mark.corpus_role("negative")
-def test_negative_rejected_with_line(corpus_row, corpus_dir):
-    path = corpus_dir / corpus_row["local_path"]
+def _assert_rejected_with_line(path):
     with pytest.raises(vrml.VRMLError) as info:
         _load(path)
     assert info.value.line is not None, f"no line in {info.value}"
     assert info.value.path == str(path)
+
+
+@pytest.mark.corpus_role("negative")
+def test_negative_rejected_with_line(corpus_row, corpus_dir):
+    _assert_rejected_with_line(corpus_dir / corpus_row["local_path"])
 
 
 # -- extension ----------------------------------------------------------------------------
 
 @pytest.mark.corpus_role("extension")
 def test_extension_strict_rejected_with_line(corpus_row, corpus_dir):
-    path = corpus_dir / corpus_row["local_path"]
-    with pytest.raises(vrml.VRMLError) as info:
-        _load(path)
-    assert info.value.line is not None, f"no line in {info.value}"
-    assert info.value.path == str(path)
+    _assert_rejected_with_line(corpus_dir / corpus_row["local_path"])
 
 
 @pytest.mark.corpus_role("extension")

@@ -26,6 +26,7 @@ from typing import Iterable, Optional
 
 import numpy as np
 
+from .._location import where_text
 from .face import FaceModel
 from .fapu import FAPU
 from .tables import FAP, FEATURE_POINTS
@@ -86,12 +87,7 @@ class Finding:
             self.severity = RULES[self.code].severity
 
     def where(self) -> str:
-        text = self.path or "<face>"
-        if self.line is not None:
-            text += f":{self.line}"
-            if self.column is not None:
-                text += f":{self.column}"
-        return text
+        return where_text(self.path, self.line, self.column, "<face>")
 
     def __str__(self) -> str:
         return f"{self.where()}: {self.severity} {self.code}: {self.message}"

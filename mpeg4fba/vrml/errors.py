@@ -14,6 +14,8 @@ from __future__ import annotations
 import bisect
 from typing import Iterable, Optional
 
+from .._location import where_text
+
 
 class LocatedError(ValueError):
     """An error in some text that says where: ``path``, ``line``, ``column`` (1-based;
@@ -30,12 +32,7 @@ class LocatedError(ValueError):
         super().__init__(str(self))
 
     def where(self) -> str:
-        text = self.path or "<string>"
-        if self.line is not None:
-            text += f":{self.line}"
-            if self.column is not None:
-                text += f":{self.column}"
-        return text
+        return where_text(self.path, self.line, self.column)
 
     def __str__(self) -> str:
         return f"{self.where()}: {self.message}"

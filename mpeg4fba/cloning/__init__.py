@@ -1,14 +1,30 @@
-"""Facial motion cloning (Pandzic, "Facial Motion Cloning").
+"""Facial Motion Cloning (Pandzic, "Facial Motion Cloning"): copy the motion of one face
+onto another as a FAT.
 
-So far: interpolation of function values from a 2D triangle mesh, with the
-paper's anti-aliasing filter (:mod:`mpeg4fba.cloning.interp2d`).
+>>> from mpeg4fba.cloning import clone, REQUIRED_POINTS
+>>> len(REQUIRED_POINTS)
+52
+
+Modules: :mod:`~mpeg4fba.cloning.interp2d` (interpolation from a 2D triangle mesh, with
+anti-aliasing), :mod:`~mpeg4fba.cloning.normalise` (the normalised facial space),
+:mod:`~mpeg4fba.cloning.projection` and :mod:`~mpeg4fba.cloning.alignment` (the 2D
+alignment space), :mod:`~mpeg4fba.cloning.lips` (lip regions), :mod:`~mpeg4fba.cloning.parts`
+and :mod:`~mpeg4fba.cloning.rigid` (eyes, teeth, tongue, head), :mod:`~mpeg4fba.cloning.fmc`
+(the whole method).
 """
 from __future__ import annotations
 
+from .alignment import REQUIRED_POINTS, FaceSpace, align, alignment_triangles
+from .fmc import CloneWarning, FacialMotionCloner, clone, required_points_missing
 from .interp2d import antialiased_weights, interpolate, interpolation_weights
+from .lips import LOWER, OUTSIDE, UPPER, lip_regions
 from .normalise import Normaliser, face_center, point_units, region_factors
+from .parts import PARTS, find_parts
 from .projection import MOUTH_ANGLE, Projection, choose_axis, cylindrical_projection
 
-__all__ = ["interpolation_weights", "interpolate", "antialiased_weights",
+__all__ = ["clone", "FacialMotionCloner", "CloneWarning", "required_points_missing",
+           "REQUIRED_POINTS", "FaceSpace", "align", "alignment_triangles",
+           "interpolation_weights", "interpolate", "antialiased_weights",
+           "lip_regions", "UPPER", "LOWER", "OUTSIDE", "PARTS", "find_parts",
            "Normaliser", "face_center", "point_units", "region_factors",
            "Projection", "choose_axis", "cylindrical_projection", "MOUTH_ANGLE"]

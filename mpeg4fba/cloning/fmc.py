@@ -1,0 +1,703 @@
+"""Facial Motion Cloning (Pandzic): copy every FAP, viseme and expression of a source
+face onto a target face, as a FAT.
+
+The steps, each in its own module:
+
+1. Both faces' skin (every mesh that is not an eye, teeth or tongue,
+   :mod:`~mpeg4fba.cloning.parts`) go to the 2D alignment space
+   (:class:`~mpeg4fba.cloning.alignment.FaceSpace`: normalised, then cylindrically
+   projected), and the target is aligned on the source by its feature points
+   (:func:`~mpeg4fba.cloning.alignment.align`).
+2. The lip regions of both are found (:mod:`~mpeg4fba.cloning.lips`).
+3. The mapping is built once: for every target skin vertex, anti-aliased weights over
+   the source skin vertices (:func:`~mpeg4fba.cloning.interp2d.antialiased_weights`,
+   overlaps resolved by the outermost surface; target upper-lip vertices see no source
+   lower-lip vertex and vice versa), one sparse matrix ``W``.
+4. Every motion of the source (each table at each of its interval borders) is taken in
+   the normalised facial space (divided by the regional FAPU factors of its vertex),
+   all at once as one sparse matrix ``S``; the target's are ``W @ S``, multiplied by the
+   target's own regional factors (``scale_motion=False`` skips both, a pure mapping).
+5. The eyes, teeth, tongue and head: motion of the Transform that carries them in the
+   source is carried over to the target's Transform for the same part (found, or
+   installed when the target has none or its centre of rotation is wrong); motion of
+   their meshes is fitted with a rigid motion and carried over the same way, or, when
+   it is not rigid (a pupil dilating, a tongue curling), mapped vertex to vertex in 3D.
+6. Each target table gets the source's interval borders: the target's displacement at
+   each border, differenced, gives the per-interval displacements of FaceDefMesh.
+
+Example
+-------
+>>> from mpeg4fba.models import reference_head
+>>> source = reference_head(resolution=0.5)
+>>> target = reference_head(resolution=0.5, face_width=1.1, jaw=0.9, seed=3)
+>>> target.fat = FAT()
+>>> cloned = clone(source, target)
+>>> len(cloned.fat.faps), len(cloned.fat.visemes), len(cloned.fat.expressions)
+(66, 14, 6)
+"""
+from __future__ import annotations
+
+import dataclasses
+import warnings
+from typing import Mapping, Optional, Sequence, Union
+
+import numpy as np
+import scipy.sparse as sp
+from scipy.spatial import cKDTree
+
+from ..fba.face import FaceMesh, FaceModel, FaceTransform
+from ..fba.fat import FAT, FaceDefMesh, FaceDefTable, FaceDefTransform, interval_weights
+from ..fba.featurepoints import FeaturePointError, point_order
+from ..fba.stream import FapStream
+from .alignment import REQUIRED_POINTS, FaceSpace, align
+from .interp2d import antialiased_weights
+from .lips import LOWER, OUTSIDE, UPPER, lip_regions
+from .parts import (HEAD, PARTS, find_parts, lowest_common_transform, source_transform,
+                    target_transform)
+from .projection import MOUTH_ANGLE
+from .rigid import axis_angle, fit_rigid, rotation_centre, sphere_centre
+
+__all__ = ["clone", "FacialMotionCloner", "CloneWarning", "required_points_missing"]
+
+_SPEC = {p.name: p for p in PARTS}
+
+
+class CloneWarning(UserWarning):
+    """Something of the source's motion could not be carried to the target."""
+
+
+def required_points_missing(face: FaceModel) -> list:
+    """The required feature points (:data:`REQUIRED_POINTS`) ``face`` lacks, in order."""
+    return face.points.missing(REQUIRED_POINTS)
+
+
+def _check_faces(source: FaceModel, target: FaceModel) -> None:
+    problems, ids = [], set()
+    for face, which in ((source, "source"), (target, "target")):
+        missing = required_points_missing(face)
+        if missing:
+            ids |= set(missing)
+            problems.append(f"the {which} face ({face.name}) lacks feature point"
+                            f"{'s' if len(missing) > 1 else ''} {', '.join(missing)}")
+    if problems:
+        raise FeaturePointError("facial motion cloning needs the feature points of the "
+                                "alignment triangulation and 7.1: " + "; ".join(problems),
+                                point_order(ids))
+    for face, which in ((source, "source"), (target, "target")):
+        if face.fapu is None:
+            raise ValueError(f"the {which} face ({face.name}) has no usable FAPU")
+
+
+def _linear(face: FaceModel, transform: Optional[str]) -> np.ndarray:
+    return face.world_matrix(transform)[0][:3, :3]
+
+
+class FacialMotionCloner:
+    """The target-to-source mapping of two faces, built once; :meth:`clone` then makes
+    the target's FAT and :meth:`map_skin` maps any set of source skin motions.
+
+    Parameters: ``support`` (radius of the anti-aliasing filter in the alignment space,
+    0 to turn it off) and ``samples`` (points on its circle); ``scale_motion`` (normalise
+    motion by the regional FAPU factors, the paper's method; False copies it as is);
+    ``positions`` ("global" or "regional", see :mod:`~mpeg4fba.cloning.alignment`);
+    ``triangulation`` ("fixed", "delaunay" or id triples); ``lips`` (treat the lip
+    regions); ``rigid_tolerance`` (how far a part's mesh motion may be from rigid, as a
+    fraction of its size, to become a Transform motion); ``min_motion`` (target vertices
+    moving less than this fraction of a table's largest motion are left out of it).
+    """
+
+    def __init__(self, source: FaceModel, target: FaceModel, *, support: float = 0.02,
+                 samples: int = 8, scale_motion: bool = True, positions: str = "global",
+                 triangulation: Union[str, Sequence] = "fixed", lips: bool = True,
+                 mouth_angle: float = MOUTH_ANGLE, rigid_tolerance: float = 0.05,
+                 min_motion: float = 1e-3, exact: bool = True):
+        _check_faces(source, target)
+        self.source, self.target = source, target
+        self.scale_motion = bool(scale_motion)
+        self.rigid_tolerance = float(rigid_tolerance)
+        self.min_motion = float(min_motion)
+        self.source_parts = find_parts(source)
+        self.target_parts = find_parts(target)
+        self.src = _Skin(source, self.source_parts, positions, mouth_angle)
+        self.tgt = _Skin(target, self.target_parts, positions, mouth_angle)
+        if not len(self.src.vertices) or not len(self.tgt.vertices):
+            raise ValueError("both faces need skin meshes (meshes other than eyes, teeth, tongue)")
+        self.aligned, self.alignment_ids, self.alignment_triangles = align(
+            self.tgt.space, self.src.space, triangulation)
+        self.source_regions = self.target_regions = None
+        tris = self.src.triangles
+        # a triangle wrapping round the back of the head (across angle +-pi) would cover
+        # the whole face in 2D
+        uv = self.src.space.uv
+        spread = np.ptp(uv[tris][:, :, 0], axis=1)
+        tris = tris[spread < np.pi]
+        if lips:
+            pts = {k: self.src.space.point_uv(k) for k in self.src.space.ids}
+            self.source_regions = lip_regions(uv, pts, triangles=self.src.triangles,
+                                              vertices=self.src.vertices)
+            self.target_regions = lip_regions(self.aligned, pts, triangles=self.tgt.triangles,
+                                              vertices=self.tgt.vertices)
+        self.weights = self._weights(tris, support, samples, exact)
+        self._part_maps: dict = {}
+
+    # -- the skin ---------------------------------------------------------------------------
+    def _weights(self, tris, support, samples, exact) -> sp.csr_matrix:
+        src_uv, depth = self.src.space.uv, self.src.space.depth
+        nt, ns = len(self.aligned), len(src_uv)
+
+        # the target's feature point vertices take the unfiltered interpolation, so each
+        # FAP moves its feature point by exactly what it moves the source's (the filter
+        # would shave the peak of a motion centred on the point)
+        points = self.tgt.point_vertices()
+        filtered = np.ones(nt, dtype=bool)
+        filtered[points] = False
+
+        def weights(rows: np.ndarray, triangles: np.ndarray) -> sp.csr_matrix:
+            out = antialiased_weights(src_uv, triangles, self.aligned[rows], depth,
+                                      support=support, samples=samples, exact=exact)
+            plain = np.flatnonzero(~filtered[rows])
+            if len(plain) and support > 0:
+                lil = out.tolil()
+                lil[plain] = antialiased_weights(src_uv, triangles, self.aligned[rows[plain]],
+                                                 depth, support=0, exact=exact)
+                out = lil.tocsr()
+            return out
+
+        treg = self.target_regions
+        if treg is None:
+            treg = np.full(nt, OUTSIDE, dtype=np.int8)
+        sreg = self.source_regions
+        blocks, order = [], []
+        for which, hide in ((OUTSIDE, None), (UPPER, LOWER), (LOWER, UPPER)):
+            rows = np.flatnonzero(treg == which)
+            if not len(rows):
+                continue
+            t = tris if hide is None else tris[~(sreg[tris] == hide).any(axis=1)]
+            blocks.append(weights(rows, t))
+            order.append(rows)
+        w = sp.vstack(blocks).tocsr()
+        perm = np.empty(nt, dtype=np.int64)
+        perm[np.concatenate(order)] = np.arange(nt)
+        return w[perm]
+
+    def map_skin(self, motion: Union[np.ndarray, sp.spmatrix]) -> np.ndarray:
+        """Target skin motions from source skin motions.
+
+        ``motion`` is (Ns, 3) or (Ns, 3K) (K motions side by side, x y z each) in the
+        face frame, rows in the order of :attr:`source_skin` (sparse allowed); the answer
+        has the target's rows (:attr:`target_skin`), dense.
+        """
+        s = motion if sp.issparse(motion) else np.asarray(motion, dtype=np.float64)
+        k = s.shape[1] // 3
+        if self.scale_motion:
+            inv = 1.0 / np.tile(self.src.space.motion_factors, (1, k))
+            s = s.multiply(inv).tocsr() if sp.issparse(s) else s * inv
+        out = self.weights @ s
+        out = out.toarray() if sp.issparse(out) else np.asarray(out)
+        if self.scale_motion:
+            out *= np.tile(self.tgt.space.motion_factors, (1, k))
+        return out
+
+    @property
+    def source_skin(self) -> dict:
+        """Source skin mesh name -> (first row, vertex count) in the stacked skin arrays."""
+        return dict(self.src.offsets)
+
+    @property
+    def target_skin(self) -> dict:
+        return dict(self.tgt.offsets)
+
+    # -- the whole FAT ------------------------------------------------------------------------
+    def clone(self) -> FaceModel:
+        """The target with a FAT holding every table of the source's."""
+        out = _copy_face(self.target)
+        out.fat = FAT()
+        tables = sorted(self.source.fat, key=lambda t: t.key)
+        borders = [_borders(t) for t in tables]
+        columns = self._skin_columns(tables, borders)
+        mapped = self.map_skin(columns) if columns.shape[1] else np.zeros((len(self.aligned), 0))
+        installer = _Installer(out, self)
+        new_tables = []
+        col = 0
+        for table, b in zip(tables, borders):
+            nz = b[b != 0]
+            block = mapped[:, col:col + 3 * len(nz)].reshape(len(mapped), len(nz), 3)
+            col += 3 * len(nz)
+            meshes = self._skin_table(out, b, block)
+            meshes += self._part_meshes(table, b, out, installer)
+            transforms = self._part_transforms(table, b, installer) + installer.extra
+            installer.extra = []
+            new_tables.append(FaceDefTable(table.fap, meshes, transforms, table.select))
+        for t in new_tables:
+            out.fat.add(t)
+        out.invalidate()
+        for message in installer.notes:
+            warnings.warn(message, CloneWarning, stacklevel=2)
+        return out
+
+    def _skin_columns(self, tables: list, borders: list) -> sp.csr_matrix:
+        """Source skin motion of every table at every non-zero border: (Ns, 3K) sparse."""
+        rows, cols, vals = [], [], []
+        col = 0
+        for table, b in zip(tables, borders):
+            nz = b[b != 0]
+            for m in table.meshes:
+                if m.mesh not in self.src.offsets:
+                    continue
+                first, _ = self.src.offsets[m.mesh]
+                R = self.src.linear[m.mesh]
+                w = interval_weights(m.borders, nz)                       # (nb, intervals)
+                d = np.einsum("bj,kjc->kbc", w, m.displacements) @ R.T    # (k, nb, 3)
+                k = len(m.indices)
+                rows.append(np.repeat(first + m.indices, 3 * len(nz)))
+                cols.append(np.tile(col + np.arange(3 * len(nz)), k))
+                vals.append(d.reshape(-1))
+            extra = self._transform_skin_motion(table, nz)
+            if extra is not None:
+                r, c, v = extra
+                rows.append(r)
+                cols.append(col + c)
+                vals.append(v)
+            col += 3 * len(nz)
+        n = len(self.src.vertices)
+        if not rows:
+            return sp.csr_matrix((n, col))
+        s = sp.coo_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
+                          shape=(n, col)).tocsr()
+        s.sum_duplicates()
+        return s
+
+    def _transform_skin_motion(self, table: FaceDefTable, nz: np.ndarray):
+        """Skin motion from a Transform that is not a part's (a jaw carrying a chin mesh)."""
+        part_transforms = {source_transform(self.source, m) for m in self.source_parts.values()}
+        movers = [t.transform for t in table.transforms if t.transform not in part_transforms]
+        if not movers:
+            return None
+        affected = [m for m in self.src.offsets
+                    if set(movers) & set(self.source.chain(self.source.meshes[m].parent))]
+        if not affected:
+            return None
+        rows, cols, vals = [], [], []
+        for j, value in enumerate(nz):
+            play = _play_table(self.source, table, value)
+            for m in affected:
+                first, n = self.src.offsets[m]
+                moved = play.world_vertices(m)[0] - self.source.world_vertices(m)
+                rows.append(np.repeat(first + np.arange(n), 3))
+                cols.append(np.tile(3 * j + np.arange(3), n))
+                vals.append(moved.reshape(-1))
+        return np.concatenate(rows), np.concatenate(cols), np.concatenate(vals)
+
+    def _skin_table(self, out: FaceModel, borders: np.ndarray, block: np.ndarray) -> list:
+        """FaceDefMesh entries of the target skin from its motion at the non-zero borders."""
+        meshes = []
+        if block.shape[1] == 0:
+            return meshes
+        norm = np.linalg.norm(block, axis=2).max(axis=1)
+        top = norm.max() if len(norm) else 0.0
+        if top <= 0:
+            return meshes
+        keep = norm > self.min_motion * top
+        for name, (first, n) in self.tgt.offsets.items():
+            sel = np.flatnonzero(keep[first:first + n])
+            if not len(sel):
+                continue
+            R = _linear(out, out.meshes[name].parent)
+            d = block[first + sel] @ np.linalg.inv(R).T
+            meshes.append(FaceDefMesh(name, borders, sel, _intervals(borders, d)))
+        return meshes
+
+    # -- eyes, teeth, tongue, head ------------------------------------------------------------
+    def _shared_parts(self) -> list:
+        names = [p.name for p in PARTS] + [HEAD]
+        return [n for n in names if n in self.source_parts and n in self.target_parts]
+
+    def _part_transforms(self, table: FaceDefTable, borders: np.ndarray, inst: "_Installer") -> list:
+        """Target FaceDefTransforms for the source's part Transforms this table drives."""
+        out, seen = [], set()
+        for part, meshes in self.source_parts.items():
+            ts = source_transform(self.source, meshes)
+            entries = [e for e in table.transforms if e.transform == ts]
+            if ts is None or not entries:
+                continue
+            if part != HEAD and ts == source_transform(self.source, self.source_parts[HEAD]):
+                continue  # the head's transform moves this part; it is mapped as the head's
+            if part not in self.target_parts:
+                inst.note(f"the target has no {part} (no mesh holds feature point "
+                          f"{' or '.join(_SPEC[part].points) if part in _SPEC else '-'}); "
+                          f"FAP {table.fap}'s motion of it is not cloned")
+                continue
+            pivot = self._source_pivot(part, ts)
+            tt = inst.transform(part, self._target_centre(part, pivot))
+            R_s = _linear(self.source, self.source.transforms[ts].parent)
+            R_t = _linear(inst.face, inst.face.transforms[tt].parent)
+            for e in entries:
+                if e.field == "rotation":
+                    axis = R_t.T @ (R_s @ np.asarray(e.rotation[:3], float))
+                    new = FaceDefTransform(tt, "rotation", rotation=(*axis, e.rotation[3]))
+                elif e.field == "translation":
+                    t = self._map_translation(part, R_s @ np.asarray(e.translation, float))
+                    new = FaceDefTransform(tt, "translation", translation=tuple(R_t.T @ t))
+                else:
+                    new = FaceDefTransform(tt, "scale", scale=e.scale)
+                key = (tt, new.field, new.rotation, new.translation, new.scale)
+                if key not in seen:
+                    seen.add(key)
+                    out.append(new)
+        return out
+
+    def _source_pivot(self, part: str, transform: str) -> np.ndarray:
+        t = self.source.transforms[transform]
+        M = self.source.world_matrix(t.parent)[0]
+        return M[:3, :3] @ (np.asarray(t.translation, float) + np.asarray(t.center, float)) + M[:3, 3]
+
+    def _target_centre(self, part: str, source_pivot: np.ndarray) -> np.ndarray:
+        """Where the target's part must turn about: an eye's centre, 7.1 for the head,
+        the source's pivot carried over for teeth and tongue."""
+        if part == HEAD:
+            return np.asarray(self.target.points["7.1"], float)
+        if _SPEC[part].kind == "eye":
+            return sphere_centre(np.vstack([self.target.world_vertices(m)
+                                            for m in self.target_parts[part]]))
+        return self.src.space.map_point(source_pivot, self.tgt.space)
+
+    def _anchor(self, part: str) -> Optional[str]:
+        pts = _SPEC[part].points if part in _SPEC else ("7.1",)
+        for fp in pts:
+            if fp in self.source.points and fp in self.target.points:
+                return fp
+        return None
+
+    def _map_translation(self, part: str, t_world: np.ndarray) -> np.ndarray:
+        if not self.scale_motion:
+            return t_world
+        fp = self._anchor(part)
+        if fp is None:
+            return t_world
+        fs = self.src.space.normaliser.factors(self.source.points[fp][None])[0]
+        ft = self.tgt.space.normaliser.factors(self.target.points[fp][None])[0]
+        return t_world / fs * ft
+
+    def _part_meshes(self, table: FaceDefTable, borders: np.ndarray, out: FaceModel,
+                     inst: "_Installer") -> list:
+        """Targets of the motion of part meshes: a rigid motion becomes Transform entries
+        (returned through ``inst.extra``), anything else is mapped vertex to vertex."""
+        result = []
+        nz = borders[borders != 0]
+        for part, meshes in self.source_parts.items():
+            if part == HEAD:
+                continue
+            entries = [m for m in table.meshes if m.mesh in meshes]
+            if not entries:
+                continue
+            if part not in self.target_parts:
+                inst.note(f"the target has no {part}; the motion of {part} meshes by "
+                          f"FAP {table.fap} is not cloned")
+                continue
+            x, offsets = _stack(self.source, meshes)
+            motion = np.zeros((len(x), len(nz), 3))
+            for m in entries:
+                first, _ = offsets[m.mesh]
+                R = _linear(self.source, self.source.meshes[m.mesh].parent)
+                w = interval_weights(m.borders, nz)
+                motion[first + m.indices] += np.einsum("bj,kjc->kbc", w, m.displacements) @ R.T
+            size = float(np.ptp(x, axis=0).max()) or 1.0
+            fits = [fit_rigid(x, x + motion[:, j]) for j in range(len(nz))]
+            rigid = all(f.is_rigid(self.rigid_tolerance, 1e-9 * size) for f in fits) and \
+                all(f.residual <= self.rigid_tolerance * size for f in fits)
+            if rigid and len(nz):
+                inst.extra.extend(self._rigid_entries(part, x, nz, fits, inst))
+            else:
+                result += self._deformation(part, borders, motion, out)
+        return result
+
+    def _rigid_entries(self, part, x, nz, fits, inst) -> list:
+        j = int(np.argmax(np.abs(nz)))
+        value, fit = float(nz[j]), fits[j]
+        axis, angle = axis_angle(fit.rotation)
+        if _SPEC[part].kind == "eye":
+            pivot = sphere_centre(x)
+        else:
+            pivot = rotation_centre(fit, x.mean(axis=0))
+        slide = fit.translation - (np.eye(3) - fit.rotation) @ pivot
+        tt = inst.transform(part, self._target_centre(part, pivot) if angle > 1e-9 else None)
+        R_t = _linear(inst.face, inst.face.transforms[tt].parent)
+        entries = []
+        if angle > 1e-9:
+            entries.append(FaceDefTransform(tt, "rotation",
+                                            rotation=(*(R_t.T @ axis), angle / value)))
+        if np.linalg.norm(slide) > 1e-9 * (np.ptp(x, axis=0).max() or 1.0):
+            t = self._map_translation(part, slide) / value
+            entries.append(FaceDefTransform(tt, "translation", translation=tuple(R_t.T @ t)))
+        return entries
+
+    def _deformation(self, part: str, borders: np.ndarray, motion: np.ndarray,
+                     out: FaceModel) -> list:
+        """Non-rigid motion of a part mapped to the target's part meshes by 3D proximity."""
+        w, t_offsets = self._part_map(part)
+        k = motion.shape[1]
+        s = motion.reshape(len(motion), 3 * k)
+        xs, _ = _stack(self.source, self.source_parts[part])
+        xt, _ = _stack(self.target, self.target_parts[part])
+        if self.scale_motion:
+            s = s / np.tile(self.src.space.normaliser.factors(xs), (1, k))
+        d = np.asarray(w @ s)
+        if self.scale_motion:
+            d = d * np.tile(self.tgt.space.normaliser.factors(xt), (1, k))
+        d = d.reshape(len(d), k, 3)
+        norm = np.linalg.norm(d, axis=2).max(axis=1)
+        top = norm.max() if len(norm) else 0.0
+        result = []
+        if top <= 0:
+            return result
+        for name, (first, n) in t_offsets.items():
+            sel = np.flatnonzero(norm[first:first + n] > self.min_motion * top)
+            if not len(sel):
+                continue
+            R = _linear(out, out.meshes[name].parent)
+            local = d[first + sel] @ np.linalg.inv(R).T
+            result.append(FaceDefMesh(name, borders, sel, _intervals(borders, local)))
+        return result
+
+    def _part_map(self, part: str) -> tuple:
+        if part not in self._part_maps:
+            xs, _ = _stack(self.source, self.source_parts[part])
+            xt, offsets = _stack(self.target, self.target_parts[part])
+            ps = self.src.space.normalise(xs)
+            pt = self.tgt.space.normalise(xt)
+            fp = self._anchor(part)
+            if fp is not None:
+                pt = pt + (self.src.space.normalise(self.source.points[fp][None])
+                           - self.tgt.space.normalise(self.target.points[fp][None]))
+            k = min(4, len(ps))
+            dist, idx = cKDTree(ps).query(pt, k=k)
+            dist, idx = dist.reshape(len(pt), k), idx.reshape(len(pt), k)
+            inv = 1.0 / np.maximum(dist, 1e-12)
+            inv[dist <= 1e-12] = 1e12
+            inv /= inv.sum(axis=1, keepdims=True)
+            w = sp.csr_matrix((inv.ravel(), (np.repeat(np.arange(len(pt)), k), idx.ravel())),
+                              shape=(len(pt), len(ps)))
+            self._part_maps[part] = (w, offsets)
+        return self._part_maps[part]
+
+
+class _Skin:
+    """A face's skin meshes stacked: world vertices, triangles, alignment space."""
+
+    def __init__(self, face: FaceModel, parts: dict, positions: str, mouth_angle: float):
+        rigid = {m for p, ms in parts.items() if p != HEAD for m in ms}
+        names = [n for n, m in face.meshes.items() if n not in rigid and len(m.vertices)]
+        self.offsets: dict = {}
+        self.linear: dict = {}
+        verts, tris = [], []
+        first = 0
+        for n in names:
+            m = face.meshes[n]
+            self.offsets[n] = (first, len(m.vertices))
+            self.linear[n] = _linear(face, m.parent)
+            verts.append(face.world_vertices(n))
+            tris.append(m.triangles + first)
+            first += len(m.vertices)
+        self.vertices = np.vstack(verts) if verts else np.zeros((0, 3))
+        self.triangles = np.vstack(tris) if tris else np.zeros((0, 3), dtype=np.int64)
+        self.space = FaceSpace(self.vertices, face.points, face.fapu, positions=positions,
+                               mouth_angle=mouth_angle)
+        self.face = face
+
+    def point_vertices(self) -> np.ndarray:
+        """Rows of the skin vertices that are feature points: a point's vertex tie, else
+        the skin vertex nearest to it when that is within 1 % of ES0."""
+        rows = set()
+        if not len(self.vertices):
+            return np.zeros(0, dtype=np.int64)
+        tree = cKDTree(self.vertices)
+        tol = 0.01 * float(self.face.fapu.ES0)
+        for fp in self.face.points:
+            tie = self.face.points.vertex(fp)
+            if tie is not None and tie[0] in self.offsets:
+                rows.add(self.offsets[tie[0]][0] + int(tie[1]))
+                continue
+            d, i = tree.query(self.face.points[fp])
+            if d <= tol:
+                rows.add(int(i))
+        return np.array(sorted(rows), dtype=np.int64)
+
+
+class _Installer:
+    """The target's part Transforms: found, or installed on first use, centres checked."""
+
+    def __init__(self, face: FaceModel, cloner: FacialMotionCloner):
+        self.face = face
+        self.cloner = cloner
+        self.parts = {p: list(m) for p, m in cloner.target_parts.items()}
+        self.chosen: dict = {}
+        self.notes: list = []
+        self.extra: list = []
+        self._tol = 0.02 * float(cloner.target.fapu.ES0)
+
+    def note(self, message: str) -> None:
+        if message not in self.notes:
+            self.notes.append(message)
+
+    def transform(self, part: str, centre: Optional[np.ndarray]) -> str:
+        if part in self.chosen:
+            return self.chosen[part]
+        if part != HEAD and HEAD not in self.chosen and self._head_moves():
+            self.transform(HEAD, np.asarray(self.cloner.target.points["7.1"], float))
+        face = self.face
+        name = target_transform(face, part, self.parts)
+        if name is None:
+            name = self._install(part, centre)
+        elif centre is not None:
+            # eyes and head must turn about their centres; a jaw's pivot is the
+            # modeller's choice unless it is far off (e.g. left at the origin)
+            rigid = part == HEAD or _SPEC[part].kind == "eye"
+            name = self._check_centre(part, name, centre, self._tol if rigid else 25 * self._tol)
+        self.chosen[part] = name
+        for rider in (_SPEC[part].riders if part in _SPEC else ()):
+            if rider in self.parts and target_transform(face, rider, self.parts) == name:
+                self.chosen.setdefault(rider, name)
+        return name
+
+    def _head_moves(self) -> bool:
+        src = self.cloner.source
+        ts = source_transform(src, self.cloner.source_parts[HEAD])
+        return ts is not None and any(e.transform == ts for t in src.fat for e in t.transforms)
+
+    def _unique(self, base: str) -> str:
+        taken = set(self.face.transforms) | set(self.face.meshes)
+        name, k = base, 2
+        while name in taken:
+            name, k = f"{base}_{k}", k + 1
+        return name
+
+    def _install(self, part: str, centre: Optional[np.ndarray]) -> str:
+        face = self.face
+        meshes = self.parts[part]
+        parent = lowest_common_transform(face, meshes)
+        label = "".join(w.capitalize() for w in part.split())
+        name = self._unique(label if part == HEAD else f"{label}Motion")
+        M = face.world_matrix(parent)[0]
+        c = np.zeros(3) if centre is None else np.linalg.inv(M) @ np.append(centre, 1.0)
+        face.transforms[name] = FaceTransform(name, parent=parent, center=tuple(c[:3]))
+        if part == HEAD:
+            for t in list(face.transforms.values()):
+                if t.name != name and t.parent is None:
+                    t.parent = name
+            for m in face.meshes.values():
+                if m.parent is None:
+                    m.parent = name
+        else:
+            for mname in meshes:
+                self._reparent(mname, name, parent)
+        self.note(f"installed Transform {name} for the {part} of the target"
+                  + (f", turning about {np.round(centre, 6).tolist()}" if centre is not None else ""))
+        return name
+
+    def _reparent(self, mesh: str, new_parent: str, common: Optional[str]) -> None:
+        face = self.face
+        m = face.meshes[mesh]
+        if m.parent != common:
+            # bake the transforms between the common ancestor and the mesh into its vertices
+            A = np.linalg.inv(face.world_matrix(common)[0]) @ face.world_matrix(m.parent)[0]
+            m.vertices = m.vertices @ A[:3, :3].T + A[:3, 3]
+        m.parent = new_parent
+        face.invalidate()
+
+    def _check_centre(self, part: str, name: str, centre: np.ndarray, tol: float) -> str:
+        face = self.face
+        t = face.transforms[name]
+        M = face.world_matrix(t.parent)[0]
+        pivot = M[:3, :3] @ (np.asarray(t.translation, float) + np.asarray(t.center, float)) + M[:3, 3]
+        if np.linalg.norm(pivot - centre) <= tol:
+            return name
+        local = np.linalg.inv(M) @ np.append(centre, 1.0)
+        still = np.allclose(t.rotation[3] % (2 * np.pi), 0) and np.allclose(t.scale, 1)
+        if still:
+            t.center = tuple(local[:3] - np.asarray(t.translation, float))
+            self.note(f"moved the centre of Transform {name} ({part}) to "
+                      f"{np.round(centre, 6).tolist()}")
+            return name
+        # a turned or scaled Transform: a new pivot Transform under it takes its children
+        W = face.world_matrix(name)[0]
+        c = np.linalg.inv(W) @ np.append(centre, 1.0)
+        pivot_name = self._unique(f"{name}Pivot")
+        face.transforms[pivot_name] = FaceTransform(pivot_name, parent=name, center=tuple(c[:3]))
+        for other in face.transforms.values():
+            if other.parent == name and other.name != pivot_name:
+                other.parent = pivot_name
+        for m in face.meshes.values():
+            if m.parent == name:
+                m.parent = pivot_name
+        face.invalidate()
+        self.note(f"installed Transform {pivot_name} under {name} ({part}) to turn about "
+                  f"{np.round(centre, 6).tolist()}")
+        return pivot_name
+
+
+def _stack(face: FaceModel, meshes: Sequence[str]) -> tuple:
+    offsets, verts, first = {}, [], 0
+    for n in meshes:
+        v = face.world_vertices(n)
+        offsets[n] = (first, len(v))
+        verts.append(v)
+        first += len(v)
+    return (np.vstack(verts) if verts else np.zeros((0, 3))), offsets
+
+
+def _borders(table: FaceDefTable) -> np.ndarray:
+    """The union of a table's interval borders (0 included; [0, 1] when it has none)."""
+    b = [m.borders for m in table.meshes]
+    if not b:
+        return np.array([0.0, 1.0])
+    return np.union1d(np.concatenate(b), [0.0])
+
+
+def _intervals(borders: np.ndarray, at_borders: np.ndarray) -> np.ndarray:
+    """Per-interval displacements [k, intervals, 3] from displacements at the non-zero
+    borders [k, nb, 3] (the displacement at 0 is 0)."""
+    zero = int(np.flatnonzero(borders == 0)[0])
+    full = np.insert(at_borders, zero, 0.0, axis=1)
+    width = np.diff(borders)
+    return np.diff(full, axis=1) / width[None, :, None]
+
+
+def _play_table(face: FaceModel, table: FaceDefTable, value: float):
+    solo = _copy_face(face, share=True)
+    solo.fat = FAT([table])
+    if table.fap == 1:
+        s = FapStream.from_values({}, fps=1, n_frames=1,
+                                  visemes=[(table.select, 0, int(value), 0)])
+    elif table.fap == 2:
+        s = FapStream.from_values({}, fps=1, n_frames=1,
+                                  expressions=[(table.select, int(value), 0, 0, 0, 0)])
+    else:
+        s = FapStream.from_values({table.fap: [value]}, fps=1, n_frames=1)
+    return solo.play(s)
+
+
+def _copy_face(face: FaceModel, share: bool = False) -> FaceModel:
+    """A copy of a face whose meshes and transforms can be re-parented without touching
+    the original (vertex arrays are shared until replaced)."""
+    meshes = face.meshes.values() if share else \
+        [dataclasses.replace(m) for m in face.meshes.values()]
+    transforms = face.transforms.values() if share else \
+        [dataclasses.replace(t) for t in face.transforms.values()]
+    out = FaceModel(meshes, transforms, points=face.points, fapu=face.fapu, fat=face.fat,
+                    name=face.name)
+    out.colors = dict(face.colors)
+    out.regions = dict(face.regions)
+    for attr in ("source", "initial_faps", "initial_viseme", "initial_expression"):
+        if hasattr(face, attr):
+            setattr(out, attr, getattr(face, attr))
+    return out
+
+
+def clone(source: FaceModel, target: FaceModel, **options) -> FaceModel:
+    """The target face with a FAT for every FAP, viseme and expression of the source's,
+    made by Facial Motion Cloning.  ``options`` go to :class:`FacialMotionCloner`.
+
+    Raises FeaturePointError (listing the ids) when either face lacks a required
+    feature point; warns :class:`CloneWarning` for anything left out or installed.
+    """
+    return FacialMotionCloner(source, target, **options).clone()

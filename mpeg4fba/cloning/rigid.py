@@ -3,7 +3,7 @@
 >>> R = axis_angle_matrix((0, 0, 1), np.pi / 2)
 >>> x = np.array([[1.0, 0, 0], [0, 1, 0], [0, 0, 1], [1, 1, 1]])
 >>> fit = fit_rigid(x, x @ R.T + [0, 0, 2])
->>> np.round(fit.axis, 6).tolist(), round(float(np.degrees(fit.angle)), 6), round(fit.residual, 9)
+>>> (np.round(fit.axis, 6) + 0.0).tolist(), round(float(np.degrees(fit.angle)), 6), round(fit.residual, 9)
 ([0.0, 0.0, 1.0], 90.0, 0.0)
 """
 from __future__ import annotations

@@ -14,8 +14,9 @@ from .formats.fap import read_fap, write_fap
 from .fba.face import FaceModel
 from .formats.validate import validate
 from .formats.wrl_face import load_face, save_face
+from .cloning import clone
 
 __version__ = "0.1.0"
 __all__ = ["vrml", "standard", "FAP", "FAPU", "FEATURE_POINTS", "VISEMES", "EXPRESSIONS",
            "FapFrame", "FapStream", "FeaturePointSet", "read_fap", "write_fap", "load_face",
-           "save_face", "FaceModel", "validate", "__version__"]
+           "save_face", "FaceModel", "validate", "clone", "__version__"]

@@ -121,6 +121,7 @@ class FaceSpace:
         self.depth = self._depth(self.normalise(self.vertices))
         self.ids = list(pts)
         self._point_uv = dict(zip(self.ids, self.project(pts.positions))) if len(pts) else {}
+        self._point_depth = dict(zip(self.ids, self._depth(pts.positions))) if len(pts) else {}
 
     def normalise(self, vertices: np.ndarray, factors: Optional[np.ndarray] = None) -> np.ndarray:
         """Positions in the normalised space this face space projects (FAPU0 units)."""
@@ -150,6 +151,9 @@ class FaceSpace:
     def point_uv(self, fp: str) -> np.ndarray:
         return self._point_uv[fp]
 
+    def points_depth(self, ids: Sequence[str]) -> np.ndarray:
+        return np.array([self._point_depth[i] for i in ids], dtype=np.float64)
+
     def points_uv(self, ids: Sequence[str]) -> np.ndarray:
         return np.array([self._point_uv[i] for i in ids], dtype=np.float64).reshape(-1, 2)
 
@@ -171,8 +175,10 @@ def alignment_weights(target: FaceSpace, ids: Sequence[str], triangles: np.ndarr
 def align(target: FaceSpace, source: FaceSpace,
           triangulation: Union[str, np.ndarray, Sequence] = "fixed", *,
           refine: bool = True) -> tuple:
-    """(aligned (N, 2) target uv, ids, triangles): the target's vertices pulled so that its
-    feature points land on the source's.
+    """(aligned (N, 2) target uv, aligned (N,) depth, ids, triangles): the target's vertices
+    pulled so that its feature points land on the source's.  The depth is carried along the
+    same way (the feature points' depth differences interpolated), so that a target
+    vertex can be compared with the source surfaces lying over it in 2D.
 
     ``triangulation`` is ``"fixed"`` (package data, all its points required), ``"delaunay"``
     (of every feature point both faces have, except 7.1 and the points inside the mouth;
@@ -185,6 +191,7 @@ def align(target: FaceSpace, source: FaceSpace,
     moved = source.points_uv(ids) - target.points_uv(ids)
     w = alignment_weights(target, ids, tris)
     aligned = target.uv + np.asarray(w @ moved)
+    depth = target.depth + np.asarray(w @ (source.points_depth(ids) - target.points_depth(ids)))
     if refine:
         extra = [i for i in point_order(set(target.ids) & set(source.ids))
                  if i not in ids and i not in _NOT_SURFACE
@@ -201,7 +208,7 @@ def align(target: FaceSpace, source: FaceSpace,
             second = delaunay_triangles(at)
             w2 = interpolation_weights(at, second, aligned)
             aligned = aligned + np.asarray(w2 @ residual)
-    return aligned, ids, tris
+    return aligned, depth, ids, tris
 
 
 #: Feature points further round the head than this (radians) are left out of the second

@@ -57,9 +57,17 @@ from .parts import (HEAD, PARTS, find_parts, lowest_common_transform, source_tra
 from .projection import MOUTH_ANGLE
 from .rigid import axis_angle, fit_rigid, rotation_centre, sphere_centre
 
-__all__ = ["clone", "FacialMotionCloner", "CloneWarning", "required_points_missing"]
+__all__ = ["clone", "FacialMotionCloner", "CloneWarning", "required_points_missing",
+           "OVERLAP_RULES"]
 
 _SPEC = {p.name: p for p in PARTS}
+
+
+#: How overlapping source triangles are chosen between: "front", the smallest depth (the
+#: outermost surface, the paper's rule), or "nearest", the surface whose depth is nearest
+#: the target vertex's own aligned depth (so hidden surfaces - the scalp under hair, the
+#: inside of the lips - map to hidden surfaces).
+OVERLAP_RULES = ("front", "nearest")
 
 
 class CloneWarning(UserWarning):
@@ -101,7 +109,7 @@ class FacialMotionCloner:
     motion by the regional FAPU factors, the paper's method; False copies it as is);
     ``positions`` ("global" or "regional", see :mod:`~mpeg4fba.cloning.alignment`);
     ``triangulation`` ("fixed", "delaunay" or id triples); ``lips`` (treat the lip
-    regions); ``rigid_tolerance`` (how far a part's mesh motion may be from rigid, as a
+    regions); ``overlap`` (:data:`OVERLAP_RULES`); ``rigid_tolerance`` (how far a part's mesh motion may be from rigid, as a
     fraction of its size, to become a Transform motion); ``min_motion`` (target vertices
     moving less than this fraction of a table's largest motion are left out of it).
     """
@@ -110,8 +118,11 @@ class FacialMotionCloner:
                  samples: int = 8, scale_motion: bool = True, positions: str = "global",
                  triangulation: Union[str, Sequence] = "fixed", lips: bool = True,
                  mouth_angle: float = MOUTH_ANGLE, rigid_tolerance: float = 0.05,
-                 min_motion: float = 1e-3, exact: bool = True):
+                 min_motion: float = 1e-3, exact: bool = True, overlap: str = "front"):
         _check_faces(source, target)
+        if overlap not in OVERLAP_RULES:
+            raise ValueError(f"overlap must be one of {OVERLAP_RULES}, not {overlap!r}")
+        self.overlap = overlap
         self.source, self.target = source, target
         self.scale_motion = bool(scale_motion)
         self.rigid_tolerance = float(rigid_tolerance)
@@ -122,7 +133,7 @@ class FacialMotionCloner:
         self.tgt = _Skin(target, self.target_parts, positions, mouth_angle)
         if not len(self.src.vertices) or not len(self.tgt.vertices):
             raise ValueError("both faces need skin meshes (meshes other than eyes, teeth, tongue)")
-        self.aligned, self.alignment_ids, self.alignment_triangles = align(
+        self.aligned, self.aligned_depth, self.alignment_ids, self.alignment_triangles = align(
             self.tgt.space, self.src.space, triangulation)
         self.source_regions = self.target_regions = None
         tris = self.src.triangles
@@ -152,14 +163,18 @@ class FacialMotionCloner:
         filtered = np.ones(nt, dtype=bool)
         filtered[points] = False
 
+        zq = self.aligned_depth if self.overlap == "nearest" else None
+
         def weights(rows: np.ndarray, triangles: np.ndarray) -> sp.csr_matrix:
             out = antialiased_weights(src_uv, triangles, self.aligned[rows], depth,
-                                      support=support, samples=samples, exact=exact)
+                                      support=support, samples=samples, exact=exact,
+                                      query_depth=None if zq is None else zq[rows])
             plain = np.flatnonzero(~filtered[rows])
             if len(plain) and support > 0:
                 lil = out.tolil()
-                lil[plain] = antialiased_weights(src_uv, triangles, self.aligned[rows[plain]],
-                                                 depth, support=0, exact=exact)
+                lil[plain] = antialiased_weights(
+                    src_uv, triangles, self.aligned[rows[plain]], depth, support=0, exact=exact,
+                    query_depth=None if zq is None else zq[rows[plain]])
                 out = lil.tocsr()
             return out
 

@@ -167,7 +167,8 @@ class _Mesh:
         return self._buckets
 
 
-def _find_inside(mesh: _Mesh, q: np.ndarray, depth: Optional[np.ndarray]):
+def _find_inside(mesh: _Mesh, q: np.ndarray, depth: Optional[np.ndarray],
+                 query_depth: Optional[np.ndarray] = None):
     """For a chunk of queries: (found mask, kept triangle id, barycentrics)."""
     nq = q.shape[0]
     cell = mesh.cells(q)
@@ -181,6 +182,8 @@ def _find_inside(mesh: _Mesh, q: np.ndarray, depth: Optional[np.ndarray]):
     qi, t, b = qi[ok], t[ok], b[ok]
     if depth is not None:
         z = np.sum(b * depth[mesh.tri[t]], axis=1)
+        if query_depth is not None:  # the surface nearest the query's own depth
+            z = np.abs(z - query_depth[qi])
         order = np.lexsort((t, z, qi))  # per query: smallest depth, then first triangle
     else:
         order = np.lexsort((t, qi))
@@ -258,6 +261,7 @@ def interpolation_weights(
     chunk: int = 4096,
     k_nearest: Optional[int] = 16,
     exact: bool = True,
+    query_depth: Optional[np.ndarray] = None,
 ) -> sp.csr_matrix:
     """Sparse (Q, N) interpolation weights of ``queries`` from a 2D triangle mesh.
 
@@ -269,6 +273,8 @@ def interpolation_weights(
     to test all at once (the result is the same; see the module docstring).
     ``exact=False`` only tests the ``k_nearest`` triangles with nearest centroids
     (fast approximation of the closest triangle for queries far outside).
+    ``query_depth`` (Q,) changes the overlap rule: among the triangles holding a query,
+    the one whose interpolated depth is nearest the query's own (not the smallest).
 
     >>> pts = np.array([[0., 0.], [1., 0.], [1., 1.], [0., 1.]])
     >>> tri = np.array([[0, 1, 2], [0, 2, 3]])
@@ -293,6 +299,13 @@ def interpolation_weights(
         z = np.asarray(depth, dtype=float)
         if z.shape != (n,):
             raise ValueError("depth must have shape (N,)")
+    zq = None
+    if query_depth is not None:
+        if z is None:
+            raise ValueError("query_depth needs depth")
+        zq = np.asarray(query_depth, dtype=float).reshape(-1)
+        if zq.shape != (q.shape[0],):
+            raise ValueError("query_depth must have shape (Q,)")
     chunk = max(1, int(chunk))
     mesh = _Mesh(pts, tris)
     nq = q.shape[0]
@@ -300,7 +313,8 @@ def interpolation_weights(
     b_all = np.zeros((nq, 3))
     missing = []
     for s in range(0, nq, chunk):
-        found, t, b = _find_inside(mesh, q[s : s + chunk], z)
+        found, t, b = _find_inside(mesh, q[s : s + chunk], z,
+                                   None if zq is None else zq[s : s + chunk])
         t_all[s : s + chunk], b_all[s : s + chunk] = t, b
         missing.append(s + np.flatnonzero(~found))
     out = np.concatenate(missing) if missing else np.zeros(0, dtype=np.int64)
@@ -335,6 +349,7 @@ def antialiased_weights(
     chunk: int = 4096,
     k_nearest: Optional[int] = 16,
     exact: bool = True,
+    query_depth: Optional[np.ndarray] = None,
 ) -> sp.csr_matrix:
     """Anti-aliased (low-pass filtered) interpolation weights, as in the paper.
 
@@ -356,7 +371,9 @@ def antialiased_weights(
     off = np.vstack([np.zeros((1, 2)), float(support) * np.column_stack([np.cos(ang), np.sin(ang)])])
     s = off.shape[0]
     qq = (q[:, None, :] + off[None, :, :]).reshape(-1, 2)
-    w = interpolation_weights(points, triangles, qq, depth, chunk=chunk, k_nearest=k_nearest, exact=exact)
+    zq = None if query_depth is None else np.repeat(np.asarray(query_depth, dtype=float), s)
+    w = interpolation_weights(points, triangles, qq, depth, chunk=chunk, k_nearest=k_nearest,
+                              exact=exact, query_depth=zq)
     avg = sp.csr_matrix(
         (np.full(nq * s, 1.0 / s), (np.repeat(np.arange(nq), s), np.arange(nq * s))),
         shape=(nq, nq * s),

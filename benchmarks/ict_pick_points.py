@@ -20,8 +20,11 @@ General helpers of the rules: the *slab* at x0 is the set of front-area (ICT ``f
 range) vertices of a window with |x - x0| < 0.015 ES0; the mesh edges inside it fall
 into pieces, and the *upper piece* is the one holding the slab's highest vertex, the
 *lower piece* the one holding its lowest (the lips, and the lids, are separate surfaces
-that touch without sharing edges).  The *front vertex at (x, y)* is the front-area
-vertex nearest to the front-most point where the line {(x, y, z)} meets the Skin.
+that touch without sharing edges).  "Lowest (ties: front-most)": of the vertices within
+0.025 cm of the lowest height, the front-most (closed lips and lids touch along a flat
+band; this is its front edge, where the contour is seen from the front); likewise for
+"highest".  The *front vertex at (x, y)* is the front-area vertex nearest to the
+front-most point where the line {(x, y, z)} meets the Skin.
 """
 from __future__ import annotations
 
@@ -38,7 +41,7 @@ if __package__ in (None, ""):
     sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from benchmarks.ict import (FP_JSON, IctData, _adjacency, ict_face, load_ict,  # noqa: E402
-                            mesh_layout, spine_top, vertex_normals)
+                            line_hits, mesh_layout, spine_top, vertex_normals)
 from mpeg4fba.fba.featurepoints import point_order  # noqa: E402
 
 #: (left point, right point) pairs that mirror each other in x.
@@ -123,22 +126,10 @@ class Picker:
 
     def front_vertex(self, x: float, y: float) -> int:
         """The front-area vertex nearest the front-most Skin point on the line (x, y, z)."""
-        T = self.skin_tris
-        P = self.V[T]                                                   # (m, 3, 3)
-        a, b, c = P[:, 0, :2], P[:, 1, :2], P[:, 2, :2]
-        q = np.array([x, y])
-        det = (b[:, 0] - a[:, 0]) * (c[:, 1] - a[:, 1]) - (c[:, 0] - a[:, 0]) * (b[:, 1] - a[:, 1])
-        ok = np.abs(det) > 1e-12
-        det = np.where(ok, det, 1.0)
-        u = ((q[0] - a[:, 0]) * (c[:, 1] - a[:, 1]) - (c[:, 0] - a[:, 0]) * (q[1] - a[:, 1])) / det
-        v = ((b[:, 0] - a[:, 0]) * (q[1] - a[:, 1]) - (q[0] - a[:, 0]) * (b[:, 1] - a[:, 1])) / det
-        w = 1 - u - v
-        hit = ok & (u >= 0) & (v >= 0) & (w >= 0)
-        if not hit.any():
+        z = line_hits(self.V, self.skin_tris, x, y)
+        if not len(z):
             raise AssertionError(f"no Skin surface at x={x:.3f}, y={y:.3f}")
-        z = w * P[:, 0, 2] + u * P[:, 1, 2] + v * P[:, 2, 2]
-        k = np.flatnonzero(hit)[np.argmax(z[hit])]
-        point = np.array([x, y, z[k]])
+        point = np.array([x, y, z[-1]])
         cand = np.flatnonzero(self.front)
         return int(cand[np.argmin(np.linalg.norm(self.V[cand] - point, axis=1))])
 
@@ -203,11 +194,11 @@ class Picker:
         self.set("2.3", self.highest(lo), "middle of the inner lower lip contour: the highest vertex "
                  "(ties: front-most) of the lower lip in the midline slab")
         up, _ = self.slab(lips, 0.5 * (self.P("2.2")[0] + self.P("2.4")[0]))
-        self.set("2.6", self.lowest(up), "inner upper lip, left: the lowest vertex of the upper lip "
-                 "in the slab halfway between 2.2 and 2.4")
+        self.set("2.6", self.lowest(up), "inner upper lip, left: the lowest vertex (ties: front-most) "
+                 "of the upper lip in the slab halfway between 2.2 and 2.4")
         _, lo = self.slab(lips, 0.5 * (self.P("2.3")[0] + self.P("2.4")[0]))
-        self.set("2.8", self.highest(lo), "inner lower lip, left: the highest vertex of the lower "
-                 "lip in the slab halfway between 2.3 and 2.4")
+        self.set("2.8", self.highest(lo), "inner lower lip, left: the highest vertex (ties: front-"
+                 "most) of the lower lip in the slab halfway between 2.3 and 2.4")
 
         # outer lip midpoints: half the arc length of the landmark contour
         for fp, chain, what in (("8.5", [51, 52, 53, 54], "outer upper lip between 8.1 and 8.3"),
@@ -231,8 +222,8 @@ class Picker:
         up, lo = self.slab(eye, x0)
         self.set("3.1", self.lowest(up), "middle of the upper lid margin: the lowest vertex (ties: "
                  "front-most) of the upper lid in the slab through the pupil 3.5")
-        self.set("3.3", self.highest(lo), "middle of the lower lid margin: the highest vertex of the "
-                 "lower lid in the slab through the pupil 3.5")
+        self.set("3.3", self.highest(lo), "middle of the lower lid margin: the highest vertex (ties: "
+                 "front-most) of the lower lid in the slab through the pupil 3.5")
         blink = np.linalg.norm(E["eyeBlink_L"], axis=1)
         moving = up[blink[up] >= 0.5 * blink[self.ids["3.1"]]]
         self.set("3.13", moving[np.argmax(V[moving, 1])],
@@ -367,7 +358,7 @@ def write_json(data: IctData, picker: Picker, path: Path) -> None:
         "points": {fp: picker.ids[fp] for fp in order},
         "meshes": {fp: layout.locate(picker.ids[fp])[0][0] for fp in order},
         "rules": {fp: picker.rules[fp] for fp in order},
-        "computed": {"7.1": (spine_top.__doc__ or "").split("\n\n")[0].strip()},
+        "computed": {"7.1": " ".join((spine_top.__doc__ or "").split("``ids``")[0].split())},
     }
     path.parent.mkdir(parents=True, exist_ok=True)
     with open(path, "w", encoding="utf-8") as f:
@@ -376,19 +367,24 @@ def write_json(data: IctData, picker: Picker, path: Path) -> None:
 
 
 # -- the picture --------------------------------------------------------------------------------
-def _draw(ax, V: np.ndarray, T: np.ndarray, axes: tuple, view: np.ndarray, color, light) -> None:
+def _draw(ax, parts: list, axes: tuple, view: np.ndarray, light, cull: bool = True) -> None:
+    """Lambert-shaded triangles of ``parts`` [(vertices, triangles, rgb)] seen along
+    ``-view``, drawn back to front (painter's algorithm) on the plane of ``axes``."""
     from matplotlib.collections import PolyCollection
-    fn = np.cross(V[T[:, 1]] - V[T[:, 0]], V[T[:, 2]] - V[T[:, 0]])
-    fn /= np.linalg.norm(fn, axis=1, keepdims=True) + 1e-12
-    vis = fn @ view > 0
-    T, fn = T[vis], fn[vis]
-    order = np.argsort((V[T] @ view).mean(axis=1))
-    T, fn = T[order], fn[order]
+    polys, depth, cols = [], [], []
     light = np.asarray(light, float) / np.linalg.norm(light)
-    s = np.clip(fn @ light, 0, 1) * 0.7 + 0.3
-    cols = np.outer(s, color)
-    ax.add_collection(PolyCollection(V[T][:, :, list(axes)], facecolors=cols, edgecolors=cols,
-                                     linewidths=0.1))
+    for V, T, color in parts:
+        fn = np.cross(V[T[:, 1]] - V[T[:, 0]], V[T[:, 2]] - V[T[:, 0]])
+        fn /= np.linalg.norm(fn, axis=1, keepdims=True) + 1e-12
+        if cull:
+            T, fn = T[fn @ view > 0], fn[fn @ view > 0]
+        fn = fn * np.sign(fn @ view + 1e-12)[:, None]          # back faces lit as front
+        polys.append(V[T][:, :, list(axes)])
+        depth.append((V[T] @ view).mean(axis=1))
+        cols.append(np.outer(np.clip(fn @ light, 0, 1) * 0.7 + 0.3, color))
+    order = np.argsort(np.concatenate(depth))
+    P, C = np.concatenate(polys)[order], np.concatenate(cols)[order]
+    ax.add_collection(PolyCollection(P, facecolors=C, edgecolors=C, linewidths=0.1))
 
 
 def plot(data: IctData, ids: dict, path: Path) -> None:
@@ -407,7 +403,7 @@ def plot(data: IctData, ids: dict, path: Path) -> None:
          (-3.2, 3.2, -5.0, -0.3)),
         ("left eye, front", fig.add_axes([0.35, 0.02, 0.30, 0.32]), (0, 1), [0, 0, 1.0],
          (1.3, 5.2, 2.3, 5.0)),
-        ("midline mouth, teeth, tongue (from +x, x >= 0 removed)", fig.add_axes([0.67, 0.02, 0.31, 0.32]),
+        ("midline: mouth, teeth, tongue (from +x, the half x >= 0 removed)", fig.add_axes([0.67, 0.02, 0.31, 0.32]),
          (2, 1), [1.0, 0, 0], (8.5, 13.3, -6.5, 1.0)),
     ]
     colors = {"Skin": (0.92, 0.76, 0.66), "LeftEyeball": (0.95, 0.95, 0.95),
@@ -415,15 +411,20 @@ def plot(data: IctData, ids: dict, path: Path) -> None:
               "LowerTeeth": (1.0, 1.0, 0.85), "GumsTongue": (0.85, 0.45, 0.45)}
     for title, ax, axes, view, lim in panels:
         view = np.asarray(view)
+        parts = []
         for name, col in colors.items():
             m = face.meshes[name]
             T = m.triangles
             if title.startswith("midline"):
                 T = T[(m.vertices[T][:, :, 0] < 0).all(axis=1)]
-            _draw(ax, m.vertices, T, axes, view, col, view + [0.3, 0.4, 0.2])
+            parts.append((m.vertices, T, col))
+        midline = title.startswith("midline")
+        _draw(ax, parts, axes, view, view + [0.3, 0.4, 0.2], cull=not midline)
         for fp in pts:
             p = pts[fp]
             if view[0] > 0 and p[0] < -0.5:          # side view: the right side is hidden
+                continue
+            if midline and abs(p[0]) > 0.3:
                 continue
             if lim is not None and not (lim[0] <= p[axes[0]] <= lim[1] and lim[2] <= p[axes[1]] <= lim[3]):
                 continue

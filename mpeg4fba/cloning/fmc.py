@@ -58,7 +58,7 @@ from .projection import MOUTH_ANGLE
 from .rigid import axis_angle, fit_rigid, rotation_centre, sphere_centre
 
 __all__ = ["clone", "FacialMotionCloner", "CloneWarning", "required_points_missing",
-           "OVERLAP_RULES"]
+           "OVERLAP_RULES", "OUTSIDE_RULES"]
 
 _SPEC = {p.name: p for p in PARTS}
 
@@ -68,6 +68,18 @@ _SPEC = {p.name: p for p in PARTS}
 #: the target vertex's own aligned depth (so hidden surfaces - the scalp under hair, the
 #: inside of the lips - map to hidden surfaces).
 OVERLAP_RULES = ("front", "nearest")
+
+
+#: How a target point that falls outside every source triangle (in an eye opening, the
+#: mouth slit, past the edge of the mesh) picks the triangle it takes its motion from, by
+#: the paper's excess-barycentric distance: among the 16 triangles with the nearest
+#: centroids ("nearby", the default), or among all triangles ("global", the letter of the
+#: paper).  The measure is in units of each triangle's own size, so over a mesh whose
+#: triangles vary in size "global" often prefers a large triangle far away to the small
+#: ones at the edge of the hole: on the 30,000-vertex reference heads 18 % of such points
+#: took their motion from more than 3 times the distance of the nearest triangle, up to
+#: the width of the face (and the search is some 300 times slower).
+OUTSIDE_RULES = ("nearby", "global")
 
 
 class CloneWarning(UserWarning):
@@ -109,7 +121,7 @@ class FacialMotionCloner:
     motion by the regional FAPU factors, the paper's method; False copies it as is);
     ``positions`` ("global" or "regional", see :mod:`~mpeg4fba.cloning.alignment`);
     ``triangulation`` ("fixed", "delaunay" or id triples); ``lips`` (treat the lip
-    regions); ``overlap`` (:data:`OVERLAP_RULES`); ``rigid_tolerance`` (how far a part's mesh motion may be from rigid, as a
+    regions); ``overlap`` (:data:`OVERLAP_RULES`); ``outside`` (:data:`OUTSIDE_RULES`); ``rigid_tolerance`` (how far a part's mesh motion may be from rigid, as a
     fraction of its size, to become a Transform motion); ``min_motion`` (target vertices
     moving less than this fraction of a table's largest motion are left out of it).
     """
@@ -118,8 +130,12 @@ class FacialMotionCloner:
                  samples: int = 8, scale_motion: bool = True, positions: str = "global",
                  triangulation: Union[str, Sequence] = "fixed", lips: bool = True,
                  mouth_angle: float = MOUTH_ANGLE, rigid_tolerance: float = 0.05,
-                 min_motion: float = 1e-3, exact: bool = True, overlap: str = "front"):
+                 min_motion: float = 1e-3, outside: str = "nearby", overlap: str = "front"):
         _check_faces(source, target)
+        if outside not in OUTSIDE_RULES:
+            raise ValueError(f"outside must be one of {OUTSIDE_RULES}, not {outside!r}")
+        exact = outside == "global"
+        self.outside = outside
         if overlap not in OVERLAP_RULES:
             raise ValueError(f"overlap must be one of {OVERLAP_RULES}, not {overlap!r}")
         self.overlap = overlap
@@ -195,22 +211,29 @@ class FacialMotionCloner:
         perm[np.concatenate(order)] = np.arange(nt)
         return w[perm]
 
-    def map_skin(self, motion: Union[np.ndarray, sp.spmatrix]) -> np.ndarray:
+    def map_skin(self, motion: Union[np.ndarray, sp.spmatrix]) -> Union[np.ndarray, sp.csr_matrix]:
         """Target skin motions from source skin motions.
 
         ``motion`` is (Ns, 3) or (Ns, 3K) (K motions side by side, x y z each) in the
-        face frame, rows in the order of :attr:`source_skin` (sparse allowed); the answer
-        has the target's rows (:attr:`target_skin`), dense.
+        face frame, rows in the order of :attr:`source_skin`; the answer has the
+        target's rows (:attr:`target_skin`), sparse for a sparse ``motion``.
         """
-        s = motion if sp.issparse(motion) else np.asarray(motion, dtype=np.float64)
+        if sp.issparse(motion):
+            s = motion.tocoo(copy=True)
+            if self.scale_motion:
+                s.data = s.data / self.src.space.motion_factors[s.row, s.col % 3]
+            out = (self.weights @ s.tocsr()).tocoo()
+            if self.scale_motion:
+                out.data = out.data * self.tgt.space.motion_factors[out.row, out.col % 3]
+            return out.tocsr()
+        s = np.asarray(motion, dtype=np.float64)
         k = s.shape[1] // 3
         if self.scale_motion:
-            inv = 1.0 / np.tile(self.src.space.motion_factors, (1, k))
-            s = s.multiply(inv).tocsr() if sp.issparse(s) else s * inv
-        out = self.weights @ s
-        out = out.toarray() if sp.issparse(out) else np.asarray(out)
+            s = (s.reshape(len(s), k, 3) / self.src.space.motion_factors[:, None, :]).reshape(s.shape)
+        out = np.asarray(self.weights @ s)
         if self.scale_motion:
-            out *= np.tile(self.tgt.space.motion_factors, (1, k))
+            out = (out.reshape(len(out), k, 3) * self.tgt.space.motion_factors[:, None, :]
+                   ).reshape(out.shape)
         return out
 
     @property
@@ -230,13 +253,13 @@ class FacialMotionCloner:
         tables = sorted(self.source.fat, key=lambda t: t.key)
         borders = [_borders(t) for t in tables]
         columns = self._skin_columns(tables, borders)
-        mapped = self.map_skin(columns) if columns.shape[1] else np.zeros((len(self.aligned), 0))
+        mapped = self.map_skin(columns).tocsc()
         installer = _Installer(out, self)
         new_tables = []
         col = 0
         for table, b in zip(tables, borders):
             nz = b[b != 0]
-            block = mapped[:, col:col + 3 * len(nz)].reshape(len(mapped), len(nz), 3)
+            block = mapped[:, col:col + 3 * len(nz)].toarray().reshape(mapped.shape[0], len(nz), 3)
             col += 3 * len(nz)
             meshes = self._skin_table(out, b, block)
             meshes += self._part_meshes(table, b, out, installer)

@@ -45,11 +45,14 @@ __all__ = ["clone_command"]
               help="How positions are normalised before the projection.")
 @click.option("--triangulation", type=click.Choice(["fixed", "delaunay"]), default="fixed", show_default=True,
               help="Feature point triangulation used to align the faces.")
+@click.option("--method", type=click.Choice(["fmc", "local-frames"]), default="fmc", show_default=True,
+              help="fmc: Facial Motion Cloning (any two faces); local-frames: Kong et al.'s "
+                   "local frames (faces that share a mesh).")
 @click.option("--lenient", is_flag=True, help="Read VRML leniently (unknown nodes kept, with a warning).")
 @click.option("--no-check", is_flag=True, help="Skip validating the result.")
 def clone_command(faces: tuple, output: str, source_points: Optional[str], target_points: Optional[str],
-                  support: float, no_scale: bool, positions: str, triangulation: str, lenient: bool,
-                  no_check: bool) -> None:
+                  support: float, no_scale: bool, positions: str, triangulation: str, method: str,
+                  lenient: bool, no_check: bool) -> None:
     """Clone the facial motion of SOURCE (default: the reference head) onto TARGET."""
     from ..cloning import FacialMotionCloner
     from ..formats.face_files import read_face
@@ -69,8 +72,12 @@ def clone_command(faces: tuple, output: str, source_points: Optional[str], targe
         if not len(source.fat):
             raise click.ClickException(f"the source face {source.name} has no FAT: nothing to clone")
         t0 = time.perf_counter()
-        cloner = FacialMotionCloner(source, target, support=support, scale_motion=not no_scale,
-                                    positions=positions, triangulation=triangulation)
+        if method == "local-frames":
+            from ..cloning import LocalFrameCloner
+            cloner = LocalFrameCloner(source, target, scale=not no_scale)
+        else:
+            cloner = FacialMotionCloner(source, target, support=support, scale_motion=not no_scale,
+                                        positions=positions, triangulation=triangulation)
         t1 = time.perf_counter()
         result = cloner.clone()
         t2 = time.perf_counter()

@@ -10,19 +10,23 @@ anti-aliasing), :mod:`~mpeg4fba.cloning.normalise` (the normalised facial space)
 :mod:`~mpeg4fba.cloning.projection` and :mod:`~mpeg4fba.cloning.alignment` (the 2D
 alignment space), :mod:`~mpeg4fba.cloning.lips` (lip regions), :mod:`~mpeg4fba.cloning.parts`
 and :mod:`~mpeg4fba.cloning.rigid` (eyes, teeth, tongue, head), :mod:`~mpeg4fba.cloning.fmc`
-(the whole method).
+(the whole method), :mod:`~mpeg4fba.cloning.local_frames` (Kong et al.'s local-frame
+cloning for faces that share a mesh).
 """
 from __future__ import annotations
 
 from .alignment import REQUIRED_POINTS, FaceSpace, align, alignment_triangles
 from .fmc import CloneWarning, FacialMotionCloner, clone, required_points_missing
+from .local_frames import (LocalFrameCloner, LocalFrameWarning, TopologyError,
+                           local_frame_clone)
 from .interp2d import antialiased_weights, interpolate, interpolation_weights
 from .lips import LOWER, OUTSIDE, UPPER, lip_regions
 from .normalise import Normaliser, face_center, point_units, region_factors
 from .parts import PARTS, find_parts
 from .projection import MOUTH_ANGLE, Projection, choose_axis, cylindrical_projection
 
-__all__ = ["clone", "FacialMotionCloner", "CloneWarning", "required_points_missing",
+__all__ = ["clone", "FacialMotionCloner", "LocalFrameCloner", "LocalFrameWarning",
+           "TopologyError", "local_frame_clone", "CloneWarning", "required_points_missing",
            "REQUIRED_POINTS", "FaceSpace", "align", "alignment_triangles",
            "interpolation_weights", "interpolate", "antialiased_weights",
            "lip_regions", "UPPER", "LOWER", "OUTSIDE", "PARTS", "find_parts",

@@ -58,7 +58,7 @@ from .projection import MOUTH_ANGLE
 from .rigid import axis_angle, fit_rigid, rotation_centre, sphere_centre
 
 __all__ = ["clone", "FacialMotionCloner", "CloneWarning", "required_points_missing",
-           "OVERLAP_RULES", "OUTSIDE_RULES"]
+           "OVERLAP_RULES", "OUTSIDE_RULES", "METHODS"]
 
 _SPEC = {p.name: p for p in PARTS}
 
@@ -731,11 +731,22 @@ def _copy_face(face: FaceModel, share: bool = False) -> FaceModel:
     return out
 
 
-def clone(source: FaceModel, target: FaceModel, **options) -> FaceModel:
-    """The target face with a FAT for every FAP, viseme and expression of the source's,
-    made by Facial Motion Cloning.  ``options`` go to :class:`FacialMotionCloner`.
+#: The cloning methods :func:`clone` knows.
+METHODS = ("fmc", "local-frames")
 
-    Raises FeaturePointError (listing the ids) when either face lacks a required
-    feature point; warns :class:`CloneWarning` for anything left out or installed.
+
+def clone(source: FaceModel, target: FaceModel, method: str = "fmc", **options) -> FaceModel:
+    """The target face with a FAT for every FAP, viseme and expression of the source's.
+
+    ``method="fmc"`` (default): Facial Motion Cloning, any two faces with the required
+    feature points (``options`` go to :class:`FacialMotionCloner`); FeaturePointError
+    listing the ids when either face lacks some, :class:`CloneWarning` for anything left
+    out or installed.  ``method="local-frames"``: Kong et al.'s local-frame cloning for
+    faces that share a mesh (:class:`~mpeg4fba.cloning.local_frames.LocalFrameCloner`).
     """
-    return FacialMotionCloner(source, target, **options).clone()
+    if method == "fmc":
+        return FacialMotionCloner(source, target, **options).clone()
+    if method == "local-frames":
+        from .local_frames import LocalFrameCloner
+        return LocalFrameCloner(source, target, **options).clone()
+    raise ValueError(f"method must be one of {', '.join(METHODS)}, not {method!r}")

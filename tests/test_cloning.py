@@ -290,3 +290,25 @@ def test_variants_still_clone_everything(source, target, options):
 
 def test_top_level_name():
     assert fba.clone is clone
+
+
+def test_eyelid_margins_are_told_apart(source):
+    c = FacialMotionCloner(source, _fresh(source))
+    first = c.target_skin["Skin"][0]
+    labels = c.target_regions[first:first + len(source.meshes["Skin"].vertices)]
+    for side, up in (("left", 3), ("right", 5)):
+        assert (labels[source.regions[f"{side}_margin_upper"]] == up).all()
+        assert (labels[source.regions[f"{side}_margin_lower"]] == up + 1).all()
+    off = FacialMotionCloner(source, _fresh(source), eyelids=False)
+    assert set(np.unique(off.target_regions)) <= {0, 1, 2}
+
+
+def test_paper_rules_are_available(source, target):
+    """overlap="front" (smallest depth) and outside="global" (closest triangle among all)
+    are the paper's letter; both still give a compliant face."""
+    out, _ = quiet(clone, source, target, overlap="front", outside="global")
+    assert validate(out).ok
+    with pytest.raises(ValueError, match="outside"):
+        FacialMotionCloner(source, target, outside="far")
+    with pytest.raises(ValueError, match="overlap"):
+        FacialMotionCloner(source, target, overlap="back")

@@ -163,3 +163,22 @@ def test_antialiasing():
     off = np.vstack([[0, 0], 0.02 * np.column_stack([np.cos(ang), np.sin(ang)])])
     manual = np.mean([interpolation_weights(pts, tris, q + o, depth).toarray() for o in off], axis=0)
     np.testing.assert_allclose(a.toarray(), manual, atol=1e-12)
+
+
+def test_nearest_depth_with_slack_takes_an_edge_on_sliver():
+    """Two layers over one spot: a wide front triangle (depth 0) and, behind it, a sliver
+    (depth 1) that the query misses by 0.001 in 2D.  Smallest depth takes the front; the
+    query's own depth (1) with slack takes the sliver."""
+    from mpeg4fba.cloning.interp2d import interpolation_weights
+    pts = np.array([[-1.0, -1.0], [1.0, -1.0], [0.0, 1.0],       # front, wide
+                    [-0.5, 0.001], [0.5, 0.001], [0.0, 0.002]])  # behind, a sliver
+    tris = np.array([[0, 1, 2], [3, 4, 5]])
+    depth = np.array([0.0, 0.0, 0.0, 1.0, 1.0, 1.0])
+    q = np.array([[0.0, 0.0]])
+    front = interpolation_weights(pts, tris, q, depth).toarray()[0]
+    assert front[:3].sum() == pytest.approx(1.0)
+    own = interpolation_weights(pts, tris, q, depth, query_depth=np.array([1.0])).toarray()[0]
+    assert own[:3].sum() == pytest.approx(1.0)            # no slack: the sliver misses
+    slack = interpolation_weights(pts, tris, q, depth, query_depth=np.array([1.0]),
+                                  slack=0.01).toarray()[0]
+    assert slack[3:].sum() == pytest.approx(1.0)

@@ -20,7 +20,7 @@ from .fmc import CloneWarning, FacialMotionCloner, clone, required_points_missin
 from .local_frames import (LocalFrameCloner, LocalFrameWarning, TopologyError,
                            local_frame_clone)
 from .interp2d import antialiased_weights, interpolate, interpolation_weights
-from .lips import LOWER, OUTSIDE, UPPER, lip_regions
+from .lips import LOWER, OUTSIDE, SLITS, UPPER, lip_regions, slit_regions
 from .normalise import Normaliser, face_center, point_units, region_factors
 from .parts import PARTS, find_parts
 from .projection import MOUTH_ANGLE, Projection, choose_axis, cylindrical_projection
@@ -29,6 +29,6 @@ __all__ = ["clone", "FacialMotionCloner", "LocalFrameCloner", "LocalFrameWarning
            "TopologyError", "local_frame_clone", "CloneWarning", "required_points_missing",
            "REQUIRED_POINTS", "FaceSpace", "align", "alignment_triangles",
            "interpolation_weights", "interpolate", "antialiased_weights",
-           "lip_regions", "UPPER", "LOWER", "OUTSIDE", "PARTS", "find_parts",
+           "lip_regions", "slit_regions", "SLITS", "UPPER", "LOWER", "OUTSIDE", "PARTS", "find_parts",
            "Normaliser", "face_center", "point_units", "region_factors",
            "Projection", "choose_axis", "cylindrical_projection", "MOUTH_ANGLE"]

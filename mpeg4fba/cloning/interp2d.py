@@ -68,7 +68,8 @@ _DEGENERATE_REL = 1e-12
 class _Mesh:
     """Per-triangle precomputation: closed-form barycentric coefficients, grid."""
 
-    def __init__(self, points: np.ndarray, triangles: np.ndarray) -> None:
+    def __init__(self, points: np.ndarray, triangles: np.ndarray, pad: float = 0.0) -> None:
+        self.pad = float(pad)
         p = points[triangles]  # (M, 3, 2)
         x1, y1 = p[:, 0, 0], p[:, 0, 1]
         x2, y2 = p[:, 1, 0], p[:, 1, 1]
@@ -82,6 +83,7 @@ class _Mesh:
         v = self.index
         d = det[v]
         self.tri = triangles[v]
+        self.points = points
         self.x3, self.y3 = x3[v], y3[v]
         # b1 = a1*(x-x3) + c1*(y-y3); b2 = a2*(x-x3) + c2*(y-y3); b3 = 1-b1-b2
         self.a1 = (y2[v] - y3[v]) / d
@@ -123,8 +125,8 @@ class _Mesh:
         size = max(size, float(np.sqrt(ext[0] * ext[1] / (4.0 * self.m))), float(ext.max()) / 4096.0)
         n = np.floor(ext / size).astype(np.int64) + 1
         self.g_lo, self.g_size, self.g_n = lo, size, n
-        c0 = self._cell_xy(self.lo)
-        c1 = self._cell_xy(self.hi)
+        c0 = self._cell_xy(self.lo - self.pad)
+        c1 = self._cell_xy(self.hi + self.pad)
         w = c1[:, 0] - c0[:, 0] + 1
         counts = w * (c1[:, 1] - c0[:, 1] + 1)
         rep = np.repeat(np.arange(self.m), counts)
@@ -167,8 +169,20 @@ class _Mesh:
         return self._buckets
 
 
+def _triangle_distance(mesh: _Mesh, t: np.ndarray, q: np.ndarray) -> np.ndarray:
+    """2D distance from points ``q`` (k, 2) to kept triangles ``t`` (k,); 0 inside."""
+    p = mesh.points[mesh.tri[t]]                      # (k, 3, 2)
+    a, b = p, np.roll(p, -1, axis=1)
+    ab = b - a
+    ap = q[:, None, :] - a
+    u = np.clip((ap * ab).sum(axis=2) / np.maximum((ab * ab).sum(axis=2), 1e-300), 0.0, 1.0)
+    d = np.sqrt(((ap - u[..., None] * ab) ** 2).sum(axis=2)).min(axis=1)
+    bc = mesh.bary(t, q)
+    return np.where(np.all(bc >= -_INSIDE_TOL, axis=1), 0.0, d)
+
+
 def _find_inside(mesh: _Mesh, q: np.ndarray, depth: Optional[np.ndarray],
-                 query_depth: Optional[np.ndarray] = None):
+                 query_depth: Optional[np.ndarray] = None, slack: float = 0.0):
     """For a chunk of queries: (found mask, kept triangle id, barycentrics)."""
     nq = q.shape[0]
     cell = mesh.cells(q)
@@ -179,6 +193,15 @@ def _find_inside(mesh: _Mesh, q: np.ndarray, depth: Optional[np.ndarray],
     t = mesh.g_tri[pos]
     b = mesh.bary(t, q[qi])
     ok = np.all((b >= -_INSIDE_TOL) & (b <= 1.0 + _INSIDE_TOL), axis=1)
+    if slack > 0 and query_depth is not None:
+        # triangles passing within ``slack``: surfaces seen edge-on (the inside of a lip)
+        # are slivers in 2D that a query on them misses by a hair
+        near = ~ok & np.all(b >= -1e3, axis=1)
+        if near.any():
+            near[near] = _triangle_distance(mesh, t[near], q[qi[near]]) <= slack
+            bc = np.clip(b[near], 0.0, 1.0)
+            b[near] = bc / bc.sum(axis=1, keepdims=True)
+            ok |= near
     qi, t, b = qi[ok], t[ok], b[ok]
     if depth is not None:
         z = np.sum(b * depth[mesh.tri[t]], axis=1)
@@ -262,6 +285,7 @@ def interpolation_weights(
     k_nearest: Optional[int] = 16,
     exact: bool = True,
     query_depth: Optional[np.ndarray] = None,
+    slack: float = 0.0,
 ) -> sp.csr_matrix:
     """Sparse (Q, N) interpolation weights of ``queries`` from a 2D triangle mesh.
 
@@ -274,7 +298,9 @@ def interpolation_weights(
     ``exact=False`` only tests the ``k_nearest`` triangles with nearest centroids
     (fast approximation of the closest triangle for queries far outside).
     ``query_depth`` (Q,) changes the overlap rule: among the triangles holding a query,
-    the one whose interpolated depth is nearest the query's own (not the smallest).
+    the one whose interpolated depth is nearest the query's own (not the smallest);
+    with it, ``slack`` > 0 also counts triangles passing within that 2D distance of the
+    query as holding it (truncated barycentrics), for surfaces seen edge-on.
 
     >>> pts = np.array([[0., 0.], [1., 0.], [1., 1.], [0., 1.]])
     >>> tri = np.array([[0, 1, 2], [0, 2, 3]])
@@ -307,14 +333,15 @@ def interpolation_weights(
         if zq.shape != (q.shape[0],):
             raise ValueError("query_depth must have shape (Q,)")
     chunk = max(1, int(chunk))
-    mesh = _Mesh(pts, tris)
+    slack = float(slack) if zq is not None else 0.0
+    mesh = _Mesh(pts, tris, pad=slack)
     nq = q.shape[0]
     t_all = np.zeros(nq, dtype=np.int64)
     b_all = np.zeros((nq, 3))
     missing = []
     for s in range(0, nq, chunk):
         found, t, b = _find_inside(mesh, q[s : s + chunk], z,
-                                   None if zq is None else zq[s : s + chunk])
+                                   None if zq is None else zq[s : s + chunk], slack)
         t_all[s : s + chunk], b_all[s : s + chunk] = t, b
         missing.append(s + np.flatnonzero(~found))
     out = np.concatenate(missing) if missing else np.zeros(0, dtype=np.int64)
@@ -350,6 +377,7 @@ def antialiased_weights(
     k_nearest: Optional[int] = 16,
     exact: bool = True,
     query_depth: Optional[np.ndarray] = None,
+    slack: float = 0.0,
 ) -> sp.csr_matrix:
     """Anti-aliased (low-pass filtered) interpolation weights, as in the paper.
 
@@ -373,7 +401,7 @@ def antialiased_weights(
     qq = (q[:, None, :] + off[None, :, :]).reshape(-1, 2)
     zq = None if query_depth is None else np.repeat(np.asarray(query_depth, dtype=float), s)
     w = interpolation_weights(points, triangles, qq, depth, chunk=chunk, k_nearest=k_nearest,
-                              exact=exact, query_depth=zq)
+                              exact=exact, query_depth=zq, slack=slack)
     avg = sp.csr_matrix(
         (np.full(nq * s, 1.0 / s), (np.repeat(np.arange(nq), s), np.arange(nq * s))),
         shape=(nq, nq * s),

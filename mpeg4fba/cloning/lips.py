@@ -1,49 +1,94 @@
-"""The lip regions of Facial Motion Cloning ("Treating the lip region").
+"""The lip regions of Facial Motion Cloning ("Treating the lip region"), and the same
+treatment for the eyelids.
 
 Upper and lower lips lie close together in the alignment space but move in opposite
-directions, so every vertex is put in one of three regions: :data:`UPPER` lip,
-:data:`LOWER` lip or :data:`OUTSIDE`.  The upper-lip region is the polygon of the inner
-upper lip contour closed by the sides of the nose (the nostrils 9.1, 9.2); the lower-lip
-region the polygon of the inner lower lip contour closed by the sides of the chin (the
-chin corners 2.11, 2.12).  Both are tested in the 2D alignment space.
+directions, so every vertex is put in the upper-lip region, the lower-lip region or
+neither.  The upper-lip region is the polygon of the inner upper lip contour closed by
+the sides of the nose (the nostrils 9.1, 9.2); the lower-lip region the polygon of the
+inner lower lip contour closed by the sides of the chin (the chin corners 2.11, 2.12).
+Both are tested in the 2D alignment space.  A target vertex of one lip then takes no
+motion from the source's other lip (:mod:`~mpeg4fba.cloning.fmc`).
 
-On a closed mouth the two inner contours coincide, and vertices of the upper lip's
-inner edge lie on (or, between feature points, a little past) the lower polygon's
-border.  So vertices within ``band`` of the inner contours are classified again by the
-mesh: each goes to the lip it is nearer to *along the surface* (edge-length-weighted
-graph distance from the vertices of either polygon outside the band).  Where the
-mouth slit is a real cut in the mesh this follows the slit exactly; where a vertex is
-shared by both lips it keeps the polygon's answer.
+Eyelids have the same problem (a blink moves the upper lid down onto a lower lid that
+stays), so each eye is treated the same way as an extension of the paper (on by
+default, ``eyelids=False`` in the cloner turns it off): the upper lid is the polygon of
+the upper lid margin (inner corner, 3.1 / 3.2, outer corner) closed by the eyebrow
+(4.5 4.3 4.1 / 4.6 4.4 4.2), the lower lid the lower margin (3.3 / 3.4) closed by the
+cheek bone and the nose bone (5.3 9.7 / 5.4 9.6).  Each such pair is a :class:`Slit`.
 
->>> uv = np.array([[0.0, 0.1], [0.0, -0.1], [0.5, 0.0], [0.0, 0.0]])
->>> pts = {"2.4": (0.3, 0.0), "2.6": (0.15, 0.0), "2.2": (0, 0.0), "2.7": (-0.15, 0.0),
-...        "2.5": (-0.3, 0.0), "2.8": (0.15, 0.0), "2.3": (0, 0.0), "2.9": (-0.15, 0.0),
+Two details the paper leaves open:
+
+* The two polygons of a slit meet on the **mid line** of the slit (the midpoints of the
+  upper and lower contour points) rather than on the two contours, so a closed mouth or
+  eye leaves no gap between them (a vertex in such a gap would take the motion of both).
+* A closed slit puts vertices of both sides on (or, between feature points, a little
+  past) the mid line, so vertices within ``band`` of it, between its corners, are
+  classified again by the mesh: each goes to the side it is nearer to *along the
+  surface* (edge-length-weighted graph distance, within the slit's two regions and the
+  band, from the vertices of either region outside the band).  Where the slit is a cut
+  in the mesh this follows it exactly; where a vertex is shared by both sides it keeps
+  the polygon's answer.
+
+>>> uv = np.array([[0.0, 0.1], [0.0, -0.1], [0.5, 0.0]])
+>>> pts = {"2.4": (0.3, 0.0), "2.6": (0.15, 0.01), "2.2": (0, 0.01), "2.7": (-0.15, 0.01),
+...        "2.5": (-0.3, 0.0), "2.8": (0.15, -0.01), "2.3": (0, -0.01), "2.9": (-0.15, -0.01),
 ...        "9.1": (0.2, 0.5), "9.2": (-0.2, 0.5), "2.11": (0.2, -0.5), "2.12": (-0.2, -0.5)}
->>> lip_regions(uv, {k: np.array(v) for k, v in pts.items()}).tolist()  # on the slit: upper
-[1, 2, 0, 1]
+>>> lip_regions(uv, {k: np.array(v) for k, v in pts.items()}).tolist()
+[1, 2, 0]
 """
 from __future__ import annotations
 
-from typing import Mapping, Optional
+from dataclasses import dataclass
+from typing import Mapping, Optional, Sequence
 
 import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.csgraph import dijkstra
 
-__all__ = ["OUTSIDE", "UPPER", "LOWER", "UPPER_LIP_POLYGON", "LOWER_LIP_POLYGON",
-           "lip_regions", "points_in_polygon", "LIP_POINTS"]
+__all__ = ["OUTSIDE", "UPPER", "LOWER", "Slit", "LIPS", "LEFT_EYELIDS", "RIGHT_EYELIDS",
+           "SLITS", "UPPER_LIP_POLYGON", "LOWER_LIP_POLYGON", "LIP_POINTS", "lip_regions",
+           "slit_regions", "points_in_polygon", "opposite"]
 
 OUTSIDE, UPPER, LOWER = 0, 1, 2
 
-#: Polygon of the upper-lip region: the inner upper contour from the left corner to the
-#: right, then up to the right and left nostrils.
-UPPER_LIP_POLYGON = ("2.4", "2.6", "2.2", "2.7", "2.5", "9.2", "9.1")
-#: Polygon of the lower-lip region: the inner lower contour, then down to the chin corners.
-LOWER_LIP_POLYGON = ("2.4", "2.8", "2.3", "2.9", "2.5", "2.12", "2.11")
+
+@dataclass(frozen=True)
+class Slit:
+    """Two facing regions: ``upper`` / ``lower`` contours (same length, shared corners at
+    both ends) and the points closing each polygon (``upper_close`` from the last corner
+    back to the first, likewise ``lower_close``)."""
+
+    name: str
+    upper: tuple
+    lower: tuple
+    upper_close: tuple
+    lower_close: tuple
+
+    @property
+    def points(self) -> tuple:
+        return tuple(dict.fromkeys(self.upper + self.lower + self.upper_close + self.lower_close))
+
+
+LIPS = Slit("lips", ("2.4", "2.6", "2.2", "2.7", "2.5"), ("2.4", "2.8", "2.3", "2.9", "2.5"),
+            ("9.2", "9.1"), ("2.12", "2.11"))
+LEFT_EYELIDS = Slit("left eyelids", ("3.11", "3.1", "3.7"), ("3.11", "3.3", "3.7"),
+                    ("4.5", "4.3", "4.1"), ("5.3", "9.7"))
+RIGHT_EYELIDS = Slit("right eyelids", ("3.8", "3.2", "3.12"), ("3.8", "3.4", "3.12"),
+                     ("4.6", "4.4", "4.2"), ("5.4", "9.6"))
+SLITS = (LIPS, LEFT_EYELIDS, RIGHT_EYELIDS)
+
+#: The paper's polygons, as point ids (the mid line replaces the inner contours).
+UPPER_LIP_POLYGON = LIPS.upper + LIPS.upper_close
+LOWER_LIP_POLYGON = LIPS.lower + LIPS.lower_close
 #: The feature points the lip regions need.
-LIP_POINTS = tuple(dict.fromkeys(UPPER_LIP_POLYGON + LOWER_LIP_POLYGON))
-_INNER_UPPER = ("2.4", "2.6", "2.2", "2.7", "2.5")
-_INNER_LOWER = ("2.4", "2.8", "2.3", "2.9", "2.5")
+LIP_POINTS = LIPS.points
+
+
+def opposite(label: int) -> int:
+    """The label of the other side of the same slit (labels from :func:`slit_regions`)."""
+    if label == OUTSIDE:
+        return OUTSIDE
+    return label + 1 if label % 2 == 1 else label - 1
 
 
 def points_in_polygon(points: np.ndarray, polygon: np.ndarray) -> np.ndarray:
@@ -74,49 +119,71 @@ def _segment_distance(points: np.ndarray, chain: np.ndarray) -> np.ndarray:
     return np.sqrt(((points[:, None, :] - near) ** 2).sum(axis=2)).min(axis=1)
 
 
-def lip_regions(uv: np.ndarray, points_uv: Mapping, *, triangles: Optional[np.ndarray] = None,
-                vertices: Optional[np.ndarray] = None, band: float = 0.03) -> np.ndarray:
-    """(n,) region of each 2D point: :data:`OUTSIDE`, :data:`UPPER` or :data:`LOWER`.
-
-    ``points_uv`` maps the ids of :data:`LIP_POINTS` to their 2D positions.  With the
-    mesh (``triangles`` over ``uv``'s rows and 3D ``vertices``) the vertices within
-    ``band`` of the inner lip contours are settled by surface distance (see the module
-    docstring).
+def slit_regions(uv: np.ndarray, points_uv: Mapping, *, slits: Sequence[Slit] = SLITS,
+                 triangles: Optional[np.ndarray] = None, vertices: Optional[np.ndarray] = None,
+                 band: float = 0.03) -> np.ndarray:
+    """(n,) int8 label of each 2D point: 0 outside every slit, ``2k + 1`` the upper side
+    of ``slits[k]``, ``2k + 2`` its lower side.  Slits whose points ``points_uv`` lacks
+    are skipped.  With the mesh (``triangles`` over ``uv``'s rows and 3D ``vertices``)
+    the vertices near each mid line are settled by surface distance.
     """
     uv = np.asarray(uv, dtype=np.float64).reshape(-1, 2)
-    upper = points_in_polygon(uv, np.array([points_uv[p] for p in UPPER_LIP_POLYGON]))
-    lower = points_in_polygon(uv, np.array([points_uv[p] for p in LOWER_LIP_POLYGON])) & ~upper
-    region = np.where(upper, UPPER, np.where(lower, LOWER, OUTSIDE)).astype(np.int8)
-    if triangles is None or vertices is None or len(uv) == 0 or band <= 0:
-        return region
-    inner = np.array([points_uv[p] for p in _INNER_UPPER])
-    inner_low = np.array([points_uv[p] for p in _INNER_LOWER])
-    near = (np.minimum(_segment_distance(uv, inner), _segment_distance(uv, inner_low)) < band) \
-        & (region != OUTSIDE)
-    if not near.any():
-        return region
-    tris = np.asarray(triangles, dtype=np.int64).reshape(-1, 3)
-    v = np.asarray(vertices, dtype=np.float64)
+    region = np.zeros(len(uv), dtype=np.int8)
+    graph = None
+    for k, slit in enumerate(slits):
+        if any(p not in points_uv for p in slit.points):
+            continue
+        up_label, low_label = 2 * k + 1, 2 * k + 2
+        upper = np.array([points_uv[p] for p in slit.upper], dtype=np.float64)
+        lower = np.array([points_uv[p] for p in slit.lower], dtype=np.float64)
+        mid = (upper + lower) / 2
+        up_poly = np.vstack([mid, [points_uv[p] for p in slit.upper_close]])
+        low_poly = np.vstack([mid, [points_uv[p] for p in slit.lower_close]])
+        free = region == OUTSIDE
+        is_up = free & points_in_polygon(uv, up_poly)
+        is_low = free & ~is_up & points_in_polygon(uv, low_poly)
+        region[is_up] = up_label
+        region[is_low] = low_label
+        if triangles is None or vertices is None or band <= 0 or len(uv) == 0:
+            continue
+        lo, hi = np.sort([mid[0, 0], mid[-1, 0]])
+        near = (_segment_distance(uv, mid) < band) & (uv[:, 0] >= lo) & (uv[:, 0] <= hi) \
+            & ((region == OUTSIDE) | (region == up_label) | (region == low_label))
+        if not near.any():
+            continue
+        if graph is None:
+            graph = _edges(np.asarray(triangles, dtype=np.int64).reshape(-1, 3),
+                           np.asarray(vertices, dtype=np.float64))
+        i, j, w = graph
+        inside = (region == up_label) | (region == low_label) | near
+        keep = inside[i] & inside[j]
+        n = len(uv)
+        g = sp.coo_matrix((np.concatenate([w[keep], w[keep]]),
+                           (np.concatenate([i[keep], j[keep]]), np.concatenate([j[keep], i[keep]]))),
+                          shape=(n, n)).tocsr()
+        dist = []
+        for label in (up_label, low_label):
+            seeds = np.flatnonzero((region == label) & ~near)
+            if len(seeds) == 0:
+                break
+            dist.append(dijkstra(g, directed=False, indices=seeds, min_only=True))
+        if len(dist) < 2:
+            continue
+        du, dl = dist
+        region[near & (du < dl)] = up_label
+        region[near & (dl < du)] = low_label
+    return region
+
+
+def _edges(tris: np.ndarray, v: np.ndarray) -> tuple:
     i = np.concatenate([tris[:, 0], tris[:, 1], tris[:, 2]])
     j = np.concatenate([tris[:, 1], tris[:, 2], tris[:, 0]])
-    # only edges within the lip regions: a path round the mouth corner through the
-    # outside region would make the far lip look near
-    keep = (region[i] != OUTSIDE) & (region[j] != OUTSIDE)
-    i, j = i[keep], j[keep]
-    w = np.linalg.norm(v[i] - v[j], axis=1) + 1e-12
-    n = len(uv)
-    graph = sp.coo_matrix((np.concatenate([w, w]), (np.concatenate([i, j]), np.concatenate([j, i]))),
-                          shape=(n, n)).tocsr()
-    out = region.copy()
-    dist = []
-    for which in (UPPER, LOWER):
-        seeds = np.flatnonzero((region == which) & ~near)
-        if len(seeds) == 0:
-            return region
-        d = dijkstra(graph, directed=False, indices=seeds, min_only=True)
-        dist.append(d)
-    du, dl = dist
-    settle = near & (np.isfinite(du) | np.isfinite(dl))
-    out[settle & (du < dl)] = UPPER
-    out[settle & (dl < du)] = LOWER
-    return out
+    return i, j, np.linalg.norm(v[i] - v[j], axis=1) + 1e-12
+
+
+def lip_regions(uv: np.ndarray, points_uv: Mapping, *, triangles: Optional[np.ndarray] = None,
+                vertices: Optional[np.ndarray] = None, band: float = 0.03) -> np.ndarray:
+    """(n,) region of each 2D point for the lips alone: :data:`OUTSIDE`, :data:`UPPER` or
+    :data:`LOWER` (see :func:`slit_regions`)."""
+    return slit_regions(uv, points_uv, slits=(LIPS,), triangles=triangles, vertices=vertices,
+                        band=band)

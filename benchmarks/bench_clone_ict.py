@@ -1,0 +1,193 @@
+#!/usr/bin/env python
+"""Quality of Facial Motion Cloning on real faces: ICT-FaceKit identities.
+
+    python benchmarks/bench_clone_ict.py [--quick] [--all] [--seeds A B] [--fraction F]
+
+Reads ``<shared>/data/ict-facekit`` in place (``$MPEG4FBA_SHARED`` or ``<repo>/../shared``;
+the script says so and exits 0 when it is absent).  Faces (:mod:`benchmarks.ict`):
+identity A = ICT neutral + identity modes with weights ~ N(0, 1) (seed A, default 1),
+identity B likewise (seed B, default 2), and B with its skin decimated to ``--fraction``
+(default 0.25: 11,248 -> about 2,800 skin vertices, another topology; each kept vertex is
+an original one, so its ground truth is known exactly).
+
+ICT's expressions are identity-independent deltas, so cloning expression E from A onto
+B has the exact ground truth ``B + delta_E`` when the motion is copied as is (**scaling
+off**, ``scale_motion=False``: a test of the mapping alone).  With **scaling on** (the
+paper's FAPU normalisation) the cloned motion is, by design, A's motion resized to B's
+proportions, so its difference from ``delta_E`` is partly intended; it is reported too.
+
+For each expression (default the eight of the issue; ``--all``: all 53) the source skin
+motion goes through ``FacialMotionCloner.map_skin`` and the result on B's skin is compared
+with the truth: mean, p95 and max of the vertex error as % of B's inter-ocular distance
+(|3.5 - 3.6|), per region (:func:`benchmarks.ict.skin_regions`: mouth, eyes, brows, rest,
+the ICT ``face`` area only) and over all of it, and flipped triangles (triangles of B's
+skin whose normal turns by more than 90 degrees, cloned vs truth).  Rigid parts: jawOpen
+as a one-table FAT on A (FAP 3 at 1024), cloned with ``clone()``: the rotation of the
+Transform installed for B's lower teeth against the rotation fitted to B's true lower
+teeth motion.
+
+Variants (``--variants``): the default cloner; ``overlap="nearest"``; ``positions=
+"regional"``; ``support=0`` (no anti-aliasing); ``outside="global"``.
+"""
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+import warnings
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT))
+
+from benchmarks import ict  # noqa: E402
+from mpeg4fba.cloning import FacialMotionCloner, clone  # noqa: E402
+from mpeg4fba.cloning.rigid import fit_rigid  # noqa: E402
+from mpeg4fba.fba.fat import FAT, FaceDefMesh, FaceDefTable  # noqa: E402
+
+EXPRESSIONS = ("jawOpen", "eyeBlink_L", "mouthSmile_L", "mouthFunnel", "mouthPucker",
+               "browInnerUp_L", "cheekPuff_L", "noseSneer_L")
+REGIONS = ("mouth", "eyes", "brows", "rest")
+VARIANTS = {
+    "default": {},
+    "overlap=nearest": {"overlap": "nearest"},
+    "positions=regional": {"positions": "regional"},
+    "support=0": {"support": 0.0},
+    "outside=global": {"outside": "global"},
+}
+
+
+def source_motion(cloner, face, deltas: dict) -> np.ndarray:
+    """(Ns, 3K) source skin motion from per-mesh (K, n, 3) deltas."""
+    k = next(iter(deltas.values())).shape[0]
+    out = np.zeros((len(cloner.src.vertices), k, 3))
+    for mesh, (first, n) in cloner.source_skin.items():
+        out[first:first + n] = np.moveaxis(deltas[mesh], 0, 1)
+    return out.reshape(len(out), 3 * k)
+
+
+def evaluate(cloner, source, target, names, data) -> dict:
+    """Per expression: errors (% IOD) per region and flipped triangle counts."""
+    full = data.expression_deltas(names)
+    src = ict.split_deltas(source, full)
+    truth = ict.split_deltas(target, full)["Skin"]                   # (K, n, 3)
+    mapped = cloner.map_skin(source_motion(cloner, source, src))
+    first, n = cloner.target_skin["Skin"]
+    got = mapped[first:first + n].reshape(n, len(names), 3).transpose(1, 0, 2)
+    iod = float(np.linalg.norm(target.points["3.5"] - target.points["3.6"]))
+    regions = ict.skin_regions(target)
+    front = np.concatenate([regions[r] for r in REGIONS if r != "rest"]
+                           + [np.intersect1d(regions["rest"], target.regions[ict.SKIN_FRONT])])
+    skin = target.meshes["Skin"]
+    out = {}
+    for i, name in enumerate(names):
+        err = np.linalg.norm(got[i] - truth[i], axis=1) / iod * 100
+        row = {}
+        for r in REGIONS:
+            idx = regions[r]
+            if r == "rest":
+                idx = np.intersect1d(idx, target.regions[ict.SKIN_FRONT])
+            e = err[idx]
+            row[r] = (e.mean(), np.percentile(e, 95), e.max())
+        e = err[front]
+        row["all"] = (e.mean(), np.percentile(e, 95), e.max())
+        row["flipped"] = (ict.flipped_triangles(skin.vertices, skin.vertices + got[i], skin.triangles),
+                          ict.flipped_triangles(skin.vertices, skin.vertices + truth[i], skin.triangles))
+        out[name] = row
+    return out
+
+
+def print_table(title: str, results: dict) -> dict:
+    print(f"\n{title}")
+    print(f"{'expression':16s} " + " ".join(f"{r + ' mean/p95/max':>22s}" for r in REGIONS + ("all",))
+          + "  flipped (clone/truth)")
+    worst = {"mean": 0.0, "max": 0.0, "flip": 0}
+    means, maxes = [], []
+    for name, row in results.items():
+        cells = " ".join(f"{row[r][0]:6.3f}/{row[r][1]:6.3f}/{row[r][2]:6.3f}" for r in REGIONS + ("all",))
+        f = row["flipped"]
+        print(f"{name:16s} {cells}  {f[0]}/{f[1]}")
+        means.append(row["all"][0])
+        maxes.append(row["all"][2])
+        worst["flip"] = max(worst["flip"], f[0] - f[1])
+    worst["mean"], worst["max"] = float(np.mean(means)), float(np.max(maxes))
+    print(f"{'over these':16s} mean {worst['mean']:.3f} % IOD, max {worst['max']:.3f} % IOD, "
+          f"flipped beyond truth: {worst['flip']}")
+    return worst
+
+
+def rigid_jaw(data, source, target) -> tuple:
+    """(recovered angle, true angle) of the lower teeth under jawOpen, degrees."""
+    delta = ict.split_deltas(source, data.expressions["jawOpen"])
+    meshes = []
+    for mesh, d in delta.items():
+        moving = np.flatnonzero(np.abs(d).max(axis=1) > 0)
+        if len(moving):
+            meshes.append(FaceDefMesh(mesh, [0, 1024], moving, d[moving][:, None, :] / 1024))
+    src = source
+    src.fat = FAT([FaceDefTable(3, meshes)])
+    src.invalidate()
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        out = clone(src, target)
+    rot = [e for e in out.fat[3].transforms if e.field == "rotation"]
+    recovered = float(np.degrees(rot[0].rotation[3] * 1024)) if rot else float("nan")
+    x = target.world_vertices("LowerTeeth")
+    true = ict.split_deltas(target, data.expressions["jawOpen"])["LowerTeeth"]
+    fit = fit_rigid(x, x + true)
+    src.fat = FAT()
+    src.invalidate()
+    return recovered, float(np.degrees(fit.angle)), rot[0].transform if rot else None
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--quick", action="store_true", help="default cloner only, no variants")
+    ap.add_argument("--all", action="store_true", help="all 53 expressions")
+    ap.add_argument("--seeds", type=int, nargs=2, default=(1, 2))
+    ap.add_argument("--fraction", type=float, default=0.25)
+    args = ap.parse_args(argv)
+    try:
+        data = ict.load_ict()
+    except FileNotFoundError as e:
+        print(f"skipped: {e}")
+        return 0
+    names = list(data.expressions) if args.all else list(EXPRESSIONS)
+    a, b = args.seeds
+    A = ict.ict_face(data, ict.identity(data, a), name=f"ICT-{a}")
+    B = ict.ict_face(data, ict.identity(data, b), name=f"ICT-{b}")
+    D = ict.ict_face_decimated(data, ict.identity(data, b), args.fraction, name=f"ICT-{b}-decimated")
+    print(f"source {A.name}: {sum(len(m.vertices) for m in A.meshes.values()):,} vertices; "
+          f"targets {B.name} (skin {len(B.meshes['Skin'].vertices):,}) and {D.name} "
+          f"(skin {len(D.meshes['Skin'].vertices):,})")
+    variants = {"default": {}} if args.quick else VARIANTS
+    summary = []
+    for label, opts in variants.items():
+        for scale in (False, True):
+            for tname, target in (("same topology", B), ("decimated", D)):
+                t0 = time.perf_counter()
+                with warnings.catch_warnings():
+                    warnings.simplefilter("ignore")
+                    cloner = FacialMotionCloner(A, target, scale_motion=scale, **opts)
+                setup = time.perf_counter() - t0
+                res = evaluate(cloner, A, target, names, data)
+                worst = print_table(f"[{label}] scaling {'on' if scale else 'off'}, {A.name} -> "
+                                    f"{target.name} ({tname}); set-up {setup:.2f} s; "
+                                    f"% of IOD", res)
+                summary.append((label, scale, tname, worst))
+    rec, true, name = rigid_jaw(data, A, B)
+    print(f"\nrigid parts: jawOpen lower teeth on {B.name}: recovered rotation {rec:.2f} deg "
+          f"(Transform {name}), true {true:.2f} deg, difference {abs(rec - true):.2f} deg")
+    rec_d, true_d, _ = rigid_jaw(data, A, D)
+    print(f"             on {D.name}: recovered {rec_d:.2f} deg, true {true_d:.2f} deg")
+    print("\nsummary (mean / max % IOD over the expressions, flipped beyond truth):")
+    for label, scale, tname, w in summary:
+        print(f"  {label:20s} scaling {'on ' if scale else 'off'} {tname:14s} "
+              f"{w['mean']:.3f} / {w['max']:.3f}  {w['flip']}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -26,7 +26,7 @@ Where the paper is silent:
 * **Base points** (the paper's Table 1 is not in the text we have): :data:`BASE_POINTS`,
   chosen so that ``bp4`` lies well off the plane of the other three (a w-point near that
   plane makes ``w_z`` tiny and the division blow up).  A w-point coordinate below
-  ``min_w`` (2 %) of the frame's size on either face is not used: that component takes
+  ``min_w`` (10 %) of the w-point's distance on either face is not used: that component takes
   the mean ratio of the others, with a :class:`LocalFrameWarning`.
 
 >>> import numpy as np
@@ -68,13 +68,16 @@ SPACE_POINTS = {
 
 #: Base points (bp1 origin, bp2 X, bp3 Y, bp4 w-point) of each space.  The mouth follows
 #: the paper's description (a point on the nose, the two lip corners, the middle of the
-#: mouth); the others are built the same way round their features.
+#: mouth); the others are built the same way round their features, each with its w-point
+#: well off the plane of the other three on every face we measured (ICT identities and
+#: the reference head: each local coordinate of bp4 at least a third of its length), so
+#: that no component of the w-point ratio divides by a near-zero.
 BASE_POINTS = {
-    "mouth": ("9.15", "8.3", "8.4", "2.1"),
-    "eyes": ("9.15", "3.7", "3.12", "4.3"),
+    "mouth": ("9.15", "8.3", "8.4", "8.2"),
+    "eyes": ("2.1", "3.7", "3.12", "9.3"),
     "nose": ("2.2", "3.11", "3.8", "9.3"),
-    "brows": ("9.15", "4.5", "4.6", "11.1"),
-    "rest": ("2.1", "5.3", "5.4", "11.1"),
+    "brows": ("2.1", "4.5", "4.6", "9.3"),
+    "rest": ("11.1", "2.13", "2.14", "9.3"),
 }
 
 
@@ -204,7 +207,7 @@ class LocalFrameCloner:
     """
 
     def __init__(self, source: FaceModel, target: FaceModel, *, spaces: Optional[Mapping] = None,
-                 base_points: Optional[Mapping] = None, scale: bool = True, min_w: float = 0.02):
+                 base_points: Optional[Mapping] = None, scale: bool = True, min_w: float = 0.1):
         _check_topology(source, target)
         self.source, self.target = source, target
         bps = dict(BASE_POINTS)

@@ -26,8 +26,9 @@ as a one-table FAT on A (FAP 3 at 1024), cloned with ``clone()``: the rotation o
 Transform installed for B's lower teeth against the rotation fitted to B's true lower
 teeth motion.
 
-Variants (``--variants``): the default cloner; ``overlap="nearest"``; ``positions=
-"regional"``; ``support=0`` (no anti-aliasing); ``outside="global"``.
+Variants (all but ``--quick``): the default cloner; the paper's overlap rule
+``overlap="front"``; ``positions="regional"``; ``support=0`` (no anti-aliasing);
+``outside="global"`` (the paper's closest-triangle search over all triangles).
 """
 from __future__ import annotations
 
@@ -52,7 +53,7 @@ EXPRESSIONS = ("jawOpen", "eyeBlink_L", "mouthSmile_L", "mouthFunnel", "mouthPuc
 REGIONS = ("mouth", "eyes", "brows", "rest")
 VARIANTS = {
     "default": {},
-    "overlap=nearest": {"overlap": "nearest"},
+    "overlap=front (paper)": {"overlap": "front"},
     "positions=regional": {"positions": "regional"},
     "support=0": {"support": 0.0},
     "outside=global": {"outside": "global"},

@@ -26,7 +26,8 @@ as a one-table FAT on A (FAP 3 at 1024), cloned with ``clone()``: the rotation o
 Transform installed for B's lower teeth against the rotation fitted to B's true lower
 teeth motion.
 
-Variants (all but ``--quick``): the default cloner; the paper's overlap rule
+Variants (all but ``--quick``): the default cloner; the paper's 2D alignment alone
+``alignment="paper"``; the paper's overlap rule
 ``overlap="front"``; ``positions="regional"``; ``support=0`` (no anti-aliasing);
 ``outside="global"`` (the paper's closest-triangle search over all triangles).
 """
@@ -53,6 +54,7 @@ EXPRESSIONS = ("jawOpen", "eyeBlink_L", "mouthSmile_L", "mouthFunnel", "mouthPuc
 REGIONS = ("mouth", "eyes", "brows", "rest")
 VARIANTS = {
     "default": {},
+    "alignment=paper": {"alignment": "paper"},
     "overlap=front (paper)": {"overlap": "front"},
     "positions=regional": {"positions": "regional"},
     "support=0": {"support": 0.0},

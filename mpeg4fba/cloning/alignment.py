@@ -157,6 +157,11 @@ class FaceSpace:
     def points_uv(self, ids: Sequence[str]) -> np.ndarray:
         return np.array([self._point_uv[i] for i in ids], dtype=np.float64).reshape(-1, 2)
 
+    def map_point_array(self, points: np.ndarray, other: "FaceSpace") -> np.ndarray:
+        """:meth:`map_point` for an (n, 3) array."""
+        p = np.asarray(points, dtype=np.float64).reshape(-1, 3)
+        return (p - self.center) / self._global * other._global + other.center
+
     def map_point(self, point: np.ndarray, other: "FaceSpace") -> np.ndarray:
         """A 3D point of this face carried to ``other`` through the global normalisation
         (used for centres of rotation with no feature point of their own)."""

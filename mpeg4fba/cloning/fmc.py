@@ -7,16 +7,19 @@ The steps, each in its own module:
    :mod:`~mpeg4fba.cloning.parts`) go to the 2D alignment space
    (:class:`~mpeg4fba.cloning.alignment.FaceSpace`: normalised, then cylindrically
    projected), and the target is aligned on the source by its feature points
-   (:func:`~mpeg4fba.cloning.alignment.align`).
-2. The lip regions of both are found (:mod:`~mpeg4fba.cloning.lips`).
+   (:func:`~mpeg4fba.cloning.alignment.align`), then, by default, on the source's
+   surface (:data:`ALIGNMENTS`).
+2. The lip (and eyelid) regions of both are found (:mod:`~mpeg4fba.cloning.lips`).
 3. The mapping is built once: for every target skin vertex, anti-aliased weights over
    the source skin vertices (:func:`~mpeg4fba.cloning.interp2d.antialiased_weights`,
    overlaps resolved by the outermost surface; target upper-lip vertices see no source
    lower-lip vertex and vice versa), one sparse matrix ``W``.
 4. Every motion of the source (each table at each of its interval borders) is taken in
-   the normalised facial space (divided by the regional FAPU factors of its vertex),
-   all at once as one sparse matrix ``S``; the target's are ``W @ S``, multiplied by the
-   target's own regional factors (``scale_motion=False`` skips both, a pure mapping).
+   the normalised facial space (divided by the regional FAPU factors of its vertex) and
+   back in the target's units (multiplied by the target's factors for the same region),
+   all at once as one sparse matrix ``S``; the target's motions are ``W @ S``
+   (``scale_motion=False`` skips the scaling, a pure mapping; see :meth:`_scale` for why
+   the region is the source vertex's).
 5. The eyes, teeth, tongue and head: motion of the Transform that carries them in the
    source is carried over to the target's Transform for the same part (found, or
    installed when the target has none or its centre of rotation is wrong); motion of
@@ -303,23 +306,48 @@ class FacialMotionCloner:
         face frame, rows in the order of :attr:`source_skin`; the answer has the
         target's rows (:attr:`target_skin`), sparse for a sparse ``motion``.
         """
+        scale = self._scale()
         if sp.issparse(motion):
             s = motion.tocoo(copy=True)
-            if self.scale_motion:
-                s.data = s.data / self.src.space.motion_factors[s.row, s.col % 3]
-            out = (self.weights @ s.tocsr()).tocoo()
-            if self.scale_motion:
-                out.data = out.data * self.tgt.space.motion_factors[out.row, out.col % 3]
-            return out.tocsr()
+            if scale is not None:
+                s.data = s.data * scale[s.row, s.col % 3]
+            return (self.weights @ s.tocsr()).tocsr()
         s = np.asarray(motion, dtype=np.float64)
-        k = s.shape[1] // 3
-        if self.scale_motion:
-            s = (s.reshape(len(s), k, 3) / self.src.space.motion_factors[:, None, :]).reshape(s.shape)
-        out = np.asarray(self.weights @ s)
-        if self.scale_motion:
-            out = (out.reshape(len(out), k, 3) * self.tgt.space.motion_factors[:, None, :]
-                   ).reshape(out.shape)
-        return out
+        if scale is not None:
+            k = s.shape[1] // 3
+            s = (s.reshape(len(s), k, 3) * scale[:, None, :]).reshape(s.shape)
+        return np.asarray(self.weights @ s)
+
+    def _scale(self) -> Optional[np.ndarray]:
+        """(Ns, 3) factor taking each source vertex's motion to the target's units.
+
+        A source vertex's motion is normalised by the FAPU of its region (its closest
+        feature point) and denormalised by the target's FAPU *for the same region*, so
+        the FAP units carry over exactly (a FAP moving a feature point by v x FAPU on the
+        source does so on the target) and a target vertex between regions does not get
+        its neighbours' motion in another region's unit (which, where the eyes' IRISD
+        meets the brows' ENS, is four times off).  The target's own region is used only
+        for a point the target lacks.
+        """
+        if not self.scale_motion:
+            return None
+        if getattr(self, "_scale_cache", None) is None:
+            src = self.src.space.normaliser
+            tgt = self.tgt.space.normaliser
+            regions = src.regions(self.src.vertices)
+            index = {fp: k for k, fp in enumerate(tgt.ids)}
+            to_t = np.array([index.get(fp, -1) for fp in src.ids])
+            t = to_t[regions]
+            target_units = np.where((t >= 0)[:, None], tgt.point_factors[np.maximum(t, 0)],
+                                    np.nan)
+            missing = t < 0
+            if missing.any():
+                # a region the target has no point for: the target's nearest region there
+                near = tgt.factors(self.src.space.map_point_array(self.src.vertices[missing],
+                                                                  self.tgt.space))
+                target_units[missing] = near
+            self._scale_cache = target_units / self.src.space.motion_factors
+        return self._scale_cache
 
     @property
     def source_skin(self) -> dict:

@@ -196,7 +196,8 @@ def _find_inside(mesh: _Mesh, q: np.ndarray, depth: Optional[np.ndarray],
     if slack > 0 and query_depth is not None:
         # triangles passing within ``slack``: surfaces seen edge-on (the inside of a lip)
         # are slivers in 2D that a query on them misses by a hair
-        near = ~ok & np.all(b >= -1e3, axis=1)
+        qq = q[qi]
+        near = ~ok & np.all((qq >= mesh.lo[t] - slack) & (qq <= mesh.hi[t] + slack), axis=1)
         if near.any():
             near[near] = _triangle_distance(mesh, t[near], q[qi[near]]) <= slack
             bc = np.clip(b[near], 0.0, 1.0)

@@ -26,6 +26,11 @@ as a one-table FAT on A (FAP 3 at 1024), cloned with ``clone()``: the rotation o
 Transform installed for B's lower teeth against the rotation fitted to B's true lower
 teeth motion.
 
+``--oracle`` replaces the alignment by the true correspondence (every target vertex put
+where its original vertex is on the source: possible here because the faces come from
+one mesh) and the surface refinement is skipped, to show what the rest of the pipeline
+does with a perfect alignment.
+
 Variants (all but ``--quick``): the default cloner; the paper's 2D alignment alone
 ``alignment="paper"``; the paper's overlap rule
 ``overlap="front"``; ``positions="regional"``; ``support=0`` (no anti-aliasing);
@@ -150,12 +155,48 @@ def rigid_jaw(data, source, target) -> tuple:
     return recovered, float(np.degrees(fit.angle)), rot[0].transform if rot else None
 
 
+def _use_true_correspondence() -> None:
+    """Make the cloner align each target skin vertex onto its original vertex's place on
+    the source (ICT ids kept in the faces' ``ict_ids:`` regions)."""
+    import mpeg4fba.cloning.fmc as fmc
+
+    paper_align = fmc.align
+
+    def oracle(target_space, source_space, triangulation="fixed", **kw):
+        aligned, depth, ids, tris = paper_align(target_space, source_space, triangulation, **kw)
+        cloner = _current["cloner"]
+        for mesh, (ft, nt) in cloner.tgt.offsets.items():
+            if mesh not in cloner.src.offsets:
+                continue
+            fs, _ = cloner.src.offsets[mesh]
+            tid = cloner.target.regions[ict.IDS_PREFIX + mesh]
+            sid = cloner.source.regions[ict.IDS_PREFIX + mesh]
+            pos = np.searchsorted(sid, tid)
+            aligned[ft:ft + nt] = source_space.uv[fs + pos]
+            depth[ft:ft + nt] = source_space.depth[fs + pos]
+        return aligned, depth, ids, tris
+
+    fmc.align = oracle
+    original_init = fmc.FacialMotionCloner.__init__
+
+    def init(self, *a, **k):
+        _current["cloner"] = self
+        original_init(self, *a, **k)
+
+    fmc.FacialMotionCloner.__init__ = init
+
+
+_current: dict = {}
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--quick", action="store_true", help="default cloner only, no variants")
     ap.add_argument("--all", action="store_true", help="all 53 expressions")
     ap.add_argument("--seeds", type=int, nargs=2, default=(1, 2))
     ap.add_argument("--fraction", type=float, default=0.25)
+    ap.add_argument("--oracle", action="store_true",
+                    help="align by the true correspondence (default cloner, and support=0)")
     args = ap.parse_args(argv)
     try:
         data = ict.load_ict()
@@ -171,6 +212,10 @@ def main(argv=None) -> int:
           f"targets {B.name} (skin {len(B.meshes['Skin'].vertices):,}) and {D.name} "
           f"(skin {len(D.meshes['Skin'].vertices):,})")
     variants = {"default": {}} if args.quick else VARIANTS
+    if args.oracle:
+        _use_true_correspondence()
+        variants = {"oracle alignment": {"alignment": "paper"},
+                    "oracle alignment, support=0": {"alignment": "paper", "support": 0.0}}
     summary = []
     for label, opts in variants.items():
         for scale in (False, True):

@@ -288,7 +288,7 @@ class _Buffer:
         bounds = {"min": d.min(axis=0).tolist(), "max": d.max(axis=0).tolist()}
         if not len(moved):      # no bufferView, no sparse: an accessor of zeros
             self.accessors.append(g.Accessor(componentType=_FLOAT, count=n, type="VEC3",
-                                             **bounds))
+                                             byteOffset=None, **bounds))
             return len(self.accessors) - 1
         itype = np.dtype("<u2") if n <= 65536 else np.dtype("<u4")
         if len(moved) * (itype.itemsize + 12) >= 12 * n:
@@ -298,8 +298,9 @@ class _Buffer:
                               bufferView=self.view(moved.astype(itype)),
                               componentType=_COMPONENT[itype]),
                           values=g.AccessorSparseValues(bufferView=self.view(d[moved])))
+        # byteOffset=None: pygltflib writes 0 by default, invalid without a bufferView
         self.accessors.append(g.Accessor(componentType=_FLOAT, count=n, type="VEC3",
-                                         sparse=sparse, **bounds))
+                                         byteOffset=None, sparse=sparse, **bounds))
         return len(self.accessors) - 1
 
 
@@ -330,7 +331,7 @@ def _pivot(t) -> Optional[tuple]:
 
 def _optional(value: np.ndarray, default: tuple) -> Optional[list]:
     """A node TRS value, or None (left out) when it is glTF's default."""
-    v = [float(x) for x in np.asarray(value, dtype=np.float32)]
+    v = [float(x) + 0.0 for x in np.asarray(value, dtype=np.float32)]   # + 0.0: no -0.0
     return None if v == list(default) else v
 
 
@@ -379,9 +380,22 @@ def face_to_gltf(face: FaceModel, stream: Optional[FapStream] = None):
 
     # Meshes.
     colors = getattr(face, "colors", None) or {}
-    materials = [g.Material(name="face", doubleSided=True, pbrMetallicRoughness=g.PbrMetallicRoughness(
-        baseColorFactor=[float(x) for x in _srgb_to_linear(_DEFAULT_COLOR)] + [1.0],
-        metallicFactor=0.0, roughnessFactor=0.7))]
+    materials: list = []
+    material_of: dict = {}
+
+    def material(kind: str) -> int:
+        """The plain or the vertex-coloured material, made when first used (an unused
+        one is reported by validators)."""
+        if kind not in material_of:
+            base = [float(x) for x in _srgb_to_linear(_DEFAULT_COLOR)] + [1.0] \
+                if kind == "face" else None   # white base: COLOR_0 gives the colour
+            materials.append(g.Material(name=kind, doubleSided=True,   # VRML's solid FALSE
+                                        pbrMetallicRoughness=g.PbrMetallicRoughness(
+                                            baseColorFactor=base, metallicFactor=0.0,
+                                            roughnessFactor=0.7)))
+            material_of[kind] = len(materials) - 1
+        return material_of[kind]
+
     meshes: list = []
     mesh_node: dict = {}
     for name, m in face.meshes.items():
@@ -396,16 +410,11 @@ def face_to_gltf(face: FaceModel, stream: Optional[FapStream] = None):
             POSITION=buf.accessor(v, _ARRAY_BUFFER, bounds=True),
             NORMAL=buf.accessor(_smooth_normals(m.vertices, m.triangles).astype("<f4"),
                                 _ARRAY_BUFFER))
-        material = 0
         col = colors.get(name)
         if col is not None and np.shape(col) == (len(m.vertices), 3):
             attributes.COLOR_0 = buf.accessor(_srgb_to_linear(col).astype("<f4"), _ARRAY_BUFFER)
-            if len(materials) == 1:    # white base: COLOR_0 gives the colour
-                materials.append(g.Material(name="vertex_colors", doubleSided=True,
-                                            pbrMetallicRoughness=g.PbrMetallicRoughness(
-                                                metallicFactor=0.0, roughnessFactor=0.7)))
-            material = 1
-        prim = g.Primitive(attributes=attributes, material=material, mode=4,
+        kind = "face" if attributes.COLOR_0 is None else "vertex_colors"
+        prim = g.Primitive(attributes=attributes, material=material(kind), mode=4,
                            indices=buf.accessor(m.triangles.astype("<u4").reshape(-1),
                                                 _ELEMENT_ARRAY_BUFFER))
         ss = slots[name]

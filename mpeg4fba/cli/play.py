@@ -1,0 +1,134 @@
+"""``mpeg4fba play FACE STREAM -o OUT``: a FAP stream played on a face, written as
+
+* ``OUT.glb`` / ``OUT.gltf``: glTF 2.0, one morph target per FAT interval, the stream as
+  an animation of morph weights and Transform rotations (exact);
+* ``OUT.wrl`` / ``OUT.wrl.gz``: VRML97 with TimeSensor, Coordinate/Orientation/Position
+  interpolators and ROUTEs, for any VRML97 browser;
+* ``OUT.html``: the self-contained HTML player (three.js inside, works from file://);
+* ``OUT/`` (a name without one of those extensions, or ending in ``/``): a folder of PNG
+  frames, ``frame_0000.png``...
+
+FACE is a VRML face (or the reference head with ``--example``); STREAM a ``.fap`` file
+(or the demo phrase with ``--demo-stream``).
+
+Example
+-------
+>>> import os, tempfile
+>>> from click.testing import CliRunner
+>>> from mpeg4fba.cli import main
+>>> d = tempfile.mkdtemp()
+>>> r = CliRunner().invoke(main, ["play", "--example", "--demo-stream", "--frames", "0:3",
+...                               "-o", os.path.join(d, "frames")])
+>>> r.exit_code, sorted(os.listdir(os.path.join(d, "frames")))
+(0, ['frame_0000.png', 'frame_0001.png', 'frame_0002.png'])
+"""
+from __future__ import annotations
+
+import os
+from pathlib import Path
+from typing import Optional
+
+import click
+
+from . import main, warnings_to_stderr
+
+__all__ = ["play", "load_face_arg", "load_stream_arg"]
+
+_GLTF = (".glb", ".gltf")
+_VRML = (".wrl", ".wrz", ".wrl.gz")
+
+
+def load_face_arg(path: Optional[str], example: bool, points: Optional[str] = None,
+                  lenient: bool = False):
+    """The FACE argument of a subcommand: a face file, or the reference head."""
+    if example == (path is not None):
+        raise click.UsageError("give either FACE or --example")
+    if example:
+        from ..models import reference_head
+        return reference_head()
+    from ..formats.face_files import read_face
+    return read_face(path, points, lenient=lenient)
+
+
+def load_stream_arg(path: Optional[str], demo: bool):
+    """The STREAM argument: a .fap file, or the demo phrase."""
+    if demo == (path is not None):
+        raise click.UsageError("give either STREAM or --demo-stream")
+    if demo:
+        from ..models.phrase import demo_stream
+        return demo_stream()
+    from ..formats.fap import read_fap
+    return read_fap(path)
+
+
+def _frames(spec: Optional[str], n: int) -> range:
+    if spec is None:
+        return range(n)
+    try:
+        a, _, b = spec.partition(":")
+        first = int(a) if a else 0
+        last = int(b) if b else n
+    except ValueError:
+        raise click.BadParameter(f"{spec!r}: expected FIRST:LAST frame numbers, e.g. 0:50") from None
+    if not 0 <= first < last <= n:
+        raise click.BadParameter(f"{spec!r}: the stream has frames 0 to {n - 1}")
+    return range(first, last)
+
+
+@main.command(epilog="\b\nExamples:\n  mpeg4fba play face.wrl talk.fap -o talk.glb"
+                     "\n  mpeg4fba play face.wrl talk.fap -o talk.html"
+                     "\n  mpeg4fba play face.wrl talk.fap -o talk.wrl"
+                     "\n  mpeg4fba play --example --demo-stream -o frames/")
+@click.argument("files", nargs=-1, metavar="FACE STREAM")
+@click.option("-o", "--output", required=True, metavar="OUT",
+              help="OUT.glb, OUT.gltf, OUT.wrl, OUT.html, or a folder for PNG frames.")
+@click.option("--example", is_flag=True, help="Play on the reference head instead of FACE.")
+@click.option("--demo-stream", is_flag=True, help="Play the built-in demo phrase instead of STREAM.")
+@click.option("--frames", metavar="FIRST:LAST", help="PNG frames only: which frames (default all).")
+@click.option("--size", default="480x560", show_default=True, metavar="WxH", help="PNG frame size.")
+@click.option("--view", default="front", show_default=True,
+              type=click.Choice(["front", "three-quarter", "profile"]), help="PNG camera.")
+def play(files: tuple, output: str, example: bool, demo_stream: bool, frames: Optional[str],
+         size: str, view: str) -> None:
+    """Play STREAM on FACE and write the animation (the output's extension says how)."""
+    files = list(files)
+    face_path = None if example else (files.pop(0) if files else None)
+    stream_path = None if demo_stream else (files.pop(0) if files else None)
+    if files:
+        raise click.UsageError(f"unexpected argument {files[0]!r}")
+    with warnings_to_stderr():
+        face = load_face_arg(face_path, example)
+        stream = load_stream_arg(stream_path, demo_stream)
+        low = output.lower()
+        if low.endswith(_GLTF):
+            from ..formats.gltf import write_glb
+            write_glb(face, output, stream)
+        elif low.endswith(_VRML):
+            from ..formats.wrl_anim import write_animated_wrl
+            write_animated_wrl(face, stream, output)
+        elif low.endswith(".html"):
+            from ..formats.gltf import dumps_glb
+            from ..render.player import write_player
+            write_player(dumps_glb(face, stream), output, title=f"{face.name}: {stream.name or 'stream'}")
+        else:
+            _png_frames(face, stream, output, _frames(frames, len(stream)), size, view)
+            return
+    click.echo(f"wrote {output}: {len(stream)} frames at {stream.fps:g} fps on {face.name}")
+
+
+def _png_frames(face, stream, folder: str, frames: range, size: str, view: str) -> None:
+    from ..render.preview import render_face, save_png
+
+    try:
+        w, h = (int(v) for v in size.lower().split("x"))
+    except ValueError:
+        raise click.BadParameter(f"{size!r}: expected WIDTHxHEIGHT, e.g. 480x560") from None
+    out = Path(folder)
+    out.mkdir(parents=True, exist_ok=True)
+    playback = face.play(stream)
+    with click.progressbar(frames, label="rendering frames", file=click.get_text_stream("stderr"),
+                           show_pos=True) as bar:
+        for i in bar:
+            save_png(out / f"frame_{i:04d}.png",
+                     render_face(face, playback, frame=i, size=(w, h), view=view))
+    click.echo(f"wrote {len(frames)} PNG frames to {os.fspath(out)}")

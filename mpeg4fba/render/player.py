@@ -61,9 +61,13 @@ MODULES = {
     "three/addons/utils/BufferGeometryUtils.js": "BufferGeometryUtils.js",
 }
 
-# The module specifier of a static import or re-export (`from "x"`, `import "x"`) or of
-# a dynamic import (`import("x")`).
-_SPECIFIER = re.compile(r"""(\bfrom\s*|\bimport\s*\(?\s*)(["'])([^"'\n]+)\2""")
+# The module specifier of a static import or re-export (`import x from "s"`, `import "s"`,
+# `export * from "s"`, each at the start of a statement) and of a dynamic `import("s")`.
+_SPECIFIERS = (
+    re.compile(r"""(?:^|(?<=[;}]))[ \t]*(?:(?:import|export)\b[\w$*{},\s]*?\bfrom|import)\s*(["'])([^"'\n]+)\1""",
+               re.M),
+    re.compile(r"""\bimport\s*\(\s*(["'])([^"'\n]+)\1"""),
+)
 _GLB = re.compile(r'<script id="glb" type="application/octet-stream">([A-Za-z0-9+/=\s]*)</script>')
 _IMPORTMAP = re.compile(r'<script type="importmap">(.*?)</script>', re.S)
 
@@ -78,20 +82,25 @@ def module_specifiers(source: str) -> list:
     >>> module_specifiers("import { a } from 'three';\\nexport * from './b.js'; import('c')")
     ['three', './b.js', 'c']
     """
-    return [m.group(3) for m in _SPECIFIER.finditer(source)]
+    return [source[a:b] for a, b in _specifier_spans(source)]
+
+
+def _specifier_spans(source: str) -> list:
+    return sorted(m.span(2) for pattern in _SPECIFIERS for m in pattern.finditer(source))
 
 
 def _rewrite(source: str, specifier: str) -> str:
     """``source`` (the module mapped as ``specifier``) with each relative import made bare."""
-    def bare(m: re.Match) -> str:
-        spec = m.group(3)
-        if not spec.startswith(("./", "../")):
-            return m.group(0)
-        target = posixpath.normpath(posixpath.join(posixpath.dirname(specifier), spec))
-        if target not in MODULES:
-            raise ValueError(f"{MODULES[specifier]} imports {spec!r} ({target}), which is not vendored")
-        return f"{m.group(1)}{m.group(2)}{target}{m.group(2)}"
-    return _SPECIFIER.sub(bare, source)
+    out, done = [], 0
+    for a, b in _specifier_spans(source):
+        spec = source[a:b]
+        if spec.startswith(("./", "../")):
+            target = posixpath.normpath(posixpath.join(posixpath.dirname(specifier), spec))
+            if target not in MODULES:
+                raise ValueError(f"{MODULES[specifier]} imports {spec!r} ({target}), which is not vendored")
+            out += [source[done:a], target]
+            done = b
+    return "".join(out) + source[done:]
 
 
 @lru_cache(maxsize=1)
@@ -206,13 +215,10 @@ def player_html(glb: bytes, *, title: str, faps: Optional[list] = None) -> str:
     encoded = base64.b64encode(bytes(glb)).decode("ascii")
     glb_text = "\n".join(encoded[i:i + 76] for i in range(0, len(encoded), 76))
     licence = _web("LICENSE").decode("utf-8").replace("--", "- -").strip()
-    page = _TEMPLATE
-    for key, value in (("@LICENSE@", licence), ("@VERSION@", THREE_VERSION),
-                       ("@IMPORTMAP@", _import_map_json()), ("@GLB@", glb_text),
-                       ("@FAPS@", _script_json(payload)), ("@JS@", _PLAYER_JS),
-                       ("@TITLE@", html.escape(str(title)))):
-        page = page.replace(key, value)
-    return page
+    fill = {"LICENSE": licence, "VERSION": THREE_VERSION, "IMPORTMAP": _import_map_json(),
+            "GLB": glb_text, "FAPS": _script_json(payload), "JS": _PLAYER_JS,
+            "TITLE": html.escape(str(title))}
+    return re.sub(r"@([A-Z]+)@", lambda m: fill[m.group(1)], _TEMPLATE)
 
 
 def write_player(glb: Union[bytes, str, os.PathLike], out_path: Union[str, os.PathLike], **kw) -> Path:
@@ -373,9 +379,10 @@ async function main() {
   camera.add(key, key.target);
   scene.add(camera);
 
-  const gltf = await new Promise((resolve, reject) => new GLTFLoader().parse(
-    bytes($('glb').textContent), '', resolve,
-    e => reject(new Error('the embedded glTF cannot be read: ' + (e && e.message || e)))));
+  const gltf = await new Promise((resolve, reject) => {
+    const fail = e => reject(new Error('the embedded glTF cannot be read: ' + (e && e.message || e)));
+    try { new GLTFLoader().parse(bytes($('glb').textContent), '', resolve, fail); } catch (e) { fail(e); }
+  });
   const root = gltf.scene || gltf.scenes[0];
   if (!root) throw new Error('the glTF has no scene');
   scene.add(root);

@@ -45,7 +45,8 @@ Example
 >>> from mpeg4fba.fba.face import FaceMesh, FaceModel
 >>> from mpeg4fba.fba.fat import FAT, FaceDefMesh, FaceDefTable
 >>> skin = FaceMesh("Skin", [[0, 0, 0], [1, 0, 0], [0, 1, 0]], [[0, 1, 2]])
->>> fat = FAT([FaceDefTable(3, [FaceDefMesh("Skin", [-100, 0, 100], [2], [[0, 1e-3, 0], [0, -1e-3, 0]])])])
+>>> jaw = FaceDefMesh("Skin", [-100, 0, 100], [2], [[0, 1e-3, 0], [0, -1e-3, 0]])
+>>> fat = FAT([FaceDefTable(3, [jaw])])
 >>> doc = face_to_gltf(FaceModel([skin], fat=fat))
 >>> doc.meshes[0].extras["targetNames"], doc.meshes[0].weights
 (['open_jaw[-100,0]', 'open_jaw[0,100]'], [0.0, 0.0])
@@ -56,15 +57,18 @@ from __future__ import annotations
 
 import base64
 import os
-from typing import Optional, Union
+from typing import TYPE_CHECKING, Optional, Union
 
 import numpy as np
 
-from ..fba.face import FaceModel, table_values
+from ..fba.face import FaceModel, FaceTransform, table_values
 from ..fba.fat import FaceDefTable, interval_weights, rotation_matrices
 from ..fba.morph import TargetKey
 from ..fba.stream import FapStream
 from ..vrml.writer import atomic_write
+
+if TYPE_CHECKING:        # pygltflib is imported when a document is made
+    import pygltflib
 
 __all__ = ["face_to_gltf", "dumps_glb", "dumps_gltf", "write_glb", "target_label"]
 
@@ -144,7 +148,7 @@ def _float32(values, what: str) -> np.ndarray:
     bad = ~np.isfinite(a) | (np.abs(a) > _F32_MAX)
     if bad.any():
         first = a.reshape(-1)[np.flatnonzero(bad.reshape(-1))[0]]
-        raise ValueError(f"{what}: {first!r} can't be stored in glTF (float32, finite)")
+        raise ValueError(f"{what}: {float(first)!r} can't be stored in glTF (float32, finite)")
     return a.astype("<f4")
 
 
@@ -221,17 +225,17 @@ def _target_deltas(face: FaceModel, mesh: str, slots: list) -> list:
 def _stream_weights(face: FaceModel, slots: dict, stream: FapStream) -> dict:
     """Mesh name -> morph weights [frames, targets] of every frame of ``stream``."""
     held, given, vis, exp = stream.held()
-    values: dict = {}
+    values: dict = {}        # id(table) -> its value P per frame
+    weights: dict = {}       # id(FaceDefMesh) -> its interval weights [frames, intervals]
     out = {}
     for mesh, ss in slots.items():
         W = np.zeros((len(stream), len(ss)))
         for k, s in enumerate(ss):
-            key = id(s.table)
-            if key not in values:
-                values[key] = table_values(s.table, held, given, vis, exp)
-            p = values[key]
-            if p.any():
-                W[:, k] = interval_weights(s.entry.borders, p)[:, s.j] / s.scale
+            if id(s.entry) not in weights:
+                if id(s.table) not in values:
+                    values[id(s.table)] = table_values(s.table, held, given, vis, exp)
+                weights[id(s.entry)] = interval_weights(s.entry.borders, values[id(s.table)])
+            W[:, k] = weights[id(s.entry)][:, s.j] / s.scale
         out[mesh] = W
     return out
 
@@ -267,8 +271,7 @@ class _Buffer:
         self.data += raw
         return len(self.views) - 1
 
-    def accessor(self, arr: np.ndarray, target: Optional[int] = None, bounds: bool = False,
-                 normalized: Optional[bool] = None) -> int:
+    def accessor(self, arr: np.ndarray, target: Optional[int] = None, bounds: bool = False) -> int:
         a = np.asarray(arr)
         a2 = a.reshape(len(a), -1)
         kw = {}
@@ -276,7 +279,7 @@ class _Buffer:
             kw = {"min": a2.min(axis=0).tolist(), "max": a2.max(axis=0).tolist()}
         self.accessors.append(self.g.Accessor(
             bufferView=self.view(a, target), componentType=_COMPONENT[a.dtype],
-            count=len(a), type=_TYPE[a2.shape[1]], normalized=normalized, **kw))
+            count=len(a), type=_TYPE[a2.shape[1]], **kw))
         return len(self.accessors) - 1
 
     def target(self, d: np.ndarray) -> int:
@@ -306,7 +309,8 @@ class _Buffer:
 
 # -- the document ---------------------------------------------------------------------------
 
-def _trs(t, rotation: np.ndarray, translation: np.ndarray, scale: np.ndarray) -> tuple:
+def _trs(t: FaceTransform, rotation: np.ndarray, translation: np.ndarray,
+         scale: np.ndarray) -> tuple:
     """The named node's (translation, rotation quaternion, scale) per frame for a
     Transform's (R, T, S) per frame: T + C, R . SR, S (see the module doc)."""
     SR = rotation_matrices(t.scale_orientation[:3], [t.scale_orientation[3]])[0]
@@ -315,12 +319,13 @@ def _trs(t, rotation: np.ndarray, translation: np.ndarray, scale: np.ndarray) ->
             np.asarray(scale, float))
 
 
-def _transform_values(t) -> tuple:
+def _transform_values(t: FaceTransform) -> tuple:
+    """A Transform's neutral (R [1, 3, 3], T [1, 3], S [1, 3])."""
     return (rotation_matrices(t.rotation[:3], [t.rotation[3]]),
             np.asarray([t.translation], float), np.asarray([t.scale], float))
 
 
-def _pivot(t) -> Optional[tuple]:
+def _pivot(t: FaceTransform) -> Optional[tuple]:
     """(translation, rotation) of the ``_pivot`` node, or None when C and SR are neutral."""
     c = np.asarray(t.center, dtype=np.float64)
     SR = rotation_matrices(t.scale_orientation[:3], [t.scale_orientation[3]])[0]
@@ -335,7 +340,7 @@ def _optional(value: np.ndarray, default: tuple) -> Optional[list]:
     return None if v == list(default) else v
 
 
-def face_to_gltf(face: FaceModel, stream: Optional[FapStream] = None):
+def face_to_gltf(face: FaceModel, stream: Optional[FapStream] = None) -> "pygltflib.GLTF2":
     """The glTF 2.0 document (a ``pygltflib.GLTF2`` whose buffer is its binary blob) of
     ``face``, animated by ``stream`` when given (see the module doc).
 
@@ -349,7 +354,10 @@ def face_to_gltf(face: FaceModel, stream: Optional[FapStream] = None):
     from .. import __version__
 
     slots = _slots(face)
-    for name in face.transforms:
+    for name, t in face.transforms.items():
+        if t.parent is not None and t.parent not in face.transforms:
+            raise ValueError(f"Transform {name} hangs under {t.parent!r}, which is not a "
+                             "Transform of the face")
         face.chain(name)                     # ValueError when the tree loops
     buf = _Buffer()
 
@@ -446,7 +454,8 @@ def face_to_gltf(face: FaceModel, stream: Optional[FapStream] = None):
 
 
 def _animation(face: FaceModel, stream: FapStream, slots: dict, outer: dict, mesh_node: dict,
-               buf: _Buffer):
+               buf: _Buffer) -> "pygltflib.Animation":
+    """The animation ``fap_stream``: every frame a LINEAR keyframe (see the module doc)."""
     import pygltflib as g
     n = len(stream)
     if n == 0:

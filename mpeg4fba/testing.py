@@ -57,8 +57,9 @@ skipped: 5 raise_b_midlip (no table in the FAT)
 """
 from __future__ import annotations
 
+from ._atomic import atomic_write
+
 import os
-import tempfile
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Iterable, Optional, Union
@@ -372,18 +373,11 @@ def _updating(update: bool) -> bool:
 
 
 def _write_atomically(path: Path, arrays: dict) -> None:
+    import io
     path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    try:
-        with os.fdopen(fd, "wb") as f:
-            np.savez_compressed(f, **arrays)
-            f.flush()
-            os.fsync(f.fileno())
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
+    buffer = io.BytesIO()
+    np.savez_compressed(buffer, **arrays)
+    atomic_write(path, buffer.getvalue())
 
 
 def assert_playback_matches(face: FaceModel, stream: FapStream, golden_path: Union[str, Path], *,

@@ -212,8 +212,11 @@ def test_save_face_and_load_face(tmp_path):
     assert sorted(os.listdir(tmp_path)) == ["rich.wrl", "rich.wrl.gz"]   # no temporary left
     save_face(face, tmp_path / "plain.wrl", protos=False)
     assert_same_face(face, load_face(tmp_path / "plain.wrl"))
-    with pytest.raises(ValueError, match="glTF"):
-        save_face(face, tmp_path / "rich.glb")
+    save_face(face, tmp_path / "rich.glb")                 # glTF by extension
+    assert (tmp_path / "rich.glb").read_bytes()[:4] == b"glTF"
+    umask = os.umask(0)
+    os.umask(umask)
+    assert os.stat(tmp_path / "rich.wrl").st_mode & 0o777 == 0o666 & ~umask  # an ordinary file's mode
 
 
 def test_package_exports():

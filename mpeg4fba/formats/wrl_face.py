@@ -653,7 +653,9 @@ def scene_from_face(face: FaceModel, *, protos: bool = True) -> Scene:
 
 
 def save_face(face: FaceModel, path: PathLike, *, protos: bool = True) -> None:
-    """Write ``face`` as VRML (gzipped for ``.gz`` / ``.wrz``), atomically.
+    """Write ``face`` as VRML (gzipped for ``.gz`` / ``.wrz``), or as glTF for ``.glb`` /
+    ``.gltf`` (:func:`mpeg4fba.formats.gltf.write_glb`: a morph target per FAT interval),
+    atomically.
 
     >>> import os, tempfile
     >>> p = os.path.join(tempfile.mkdtemp(), "tri.wrl")
@@ -663,6 +665,8 @@ def save_face(face: FaceModel, path: PathLike, *, protos: bool = True) -> None:
     """
     p = os.fspath(path)
     if p.lower().endswith((".glb", ".gltf")):
-        raise ValueError(f"{p}: this is the VRML codec; write glTF with the glTF exporter")
+        from .gltf import write_glb
+        write_glb(face, p)
+        return
     dump(scene_from_face(face, protos=protos), p)
 

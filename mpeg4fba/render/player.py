@@ -35,13 +35,14 @@ True
 """
 from __future__ import annotations
 
+from .._atomic import atomic_write
+
 import base64
 import html
 import json
 import os
 import posixpath
 import re
-import tempfile
 from functools import lru_cache
 from importlib import resources
 from numbers import Real
@@ -232,7 +233,6 @@ def write_player(glb: Union[bytes, str, os.PathLike], out_path: Union[str, os.Pa
     ...     p.name, "<title>face</title>" in p.read_text("utf-8"), os.listdir(d)
     ('face.html', True, ['face.html'])
     """
-    from .preview import _umask
 
     if not isinstance(glb, (bytes, bytearray, memoryview)):
         glb = Path(glb).read_bytes()
@@ -240,16 +240,7 @@ def write_player(glb: Union[bytes, str, os.PathLike], out_path: Union[str, os.Pa
     kw.setdefault("title", path.stem)
     text = player_html(glb, **kw)
     path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8", newline="\n") as f:
-            f.write(text)
-        os.chmod(tmp, 0o666 & ~_umask())              # as an ordinary new file would be
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
+    atomic_write(path, text)
     return path
 
 

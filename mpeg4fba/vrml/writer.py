@@ -18,9 +18,10 @@ Transform {
 """
 from __future__ import annotations
 
+from .._atomic import atomic_write  # noqa: F401  (re-exported: the writers' one way to write)
+
 import gzip
 import os
-import tempfile
 from typing import Union
 
 from .errors import VRMLError
@@ -262,19 +263,3 @@ def dump(scene: Scene, path: Union[str, os.PathLike]) -> None:
     atomic_write(path, data)
 
 
-def atomic_write(path: str, data: bytes) -> None:
-    """Write ``data`` to ``path`` through a temporary file and a rename."""
-    folder = os.path.dirname(os.path.abspath(path))
-    if not os.path.isdir(folder):
-        raise FileNotFoundError(2, f"the folder {folder} does not exist", path)
-    fd, tmp = tempfile.mkstemp(prefix=".tmp-", suffix=os.path.basename(path), dir=folder)
-    try:
-        with os.fdopen(fd, "wb") as f:
-            f.write(data)
-        os.replace(tmp, path)
-    except BaseException:
-        try:
-            os.unlink(tmp)
-        except OSError:
-            pass
-        raise

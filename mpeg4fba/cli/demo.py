@@ -8,7 +8,8 @@ target, validates the result (numeric FAP check included) and writes into OUT_DI
 * ``target.glb``: the same as glTF, animated by the demo phrase (visemes, an arc of joy,
   blinks, head motion; ``mpeg4fba/models/data/demo_phrase.fap``);
 * ``demo_phrase.fap``: that stream;
-* ``preview.png``: both heads neutral, in the six expressions and in a few visemes;
+* ``preview.png``: both heads neutral, in the six expressions, in four visemes and in a
+  combination of low-level FAPs;
 * ``player.html``: the animated target in the browser (one file, works from file://);
 * ``report.txt``: what was done, the validation and the timings.
 
@@ -37,6 +38,10 @@ __all__ = ["demo"]
 #: The target's proportions (see :func:`mpeg4fba.models.reference_head`).
 TARGET = dict(face_width=1.15, jaw=0.9, nose=1.12, eye_spacing=1.08, mouth_width=0.9, seed=11)
 PREVIEW_VISEMES = (1, 2, 10, 13)           # PP, FF, aa, oh
+#: The low-level FAP values of Pandzic's Fig. 13: jaw open, lip corners stretched, every
+#: lip raise/lower FAP at -400, the left eyebrow raised.
+FIG13_FAPS = {3: 800, 53: 150, 54: 150, 31: 300, 33: 300, 35: 300,
+              **{f: -400 for f in (4, 5, 8, 9, 10, 11, 51, 52, 55, 56, 57, 58)}}
 
 
 @main.command(epilog="\b\nExamples:\n  mpeg4fba demo demo-out\n  mpeg4fba demo demo-out --quick")
@@ -155,10 +160,11 @@ def _preview(source, target, path: Path, quick: bool) -> None:
     poses = [("neutral", {})]
     poses += [(e.name, {"expressions": (e.number, 63, 0, 0, 0, 0)}) for e in EXPRESSIONS if e.number]
     poses += [(f"viseme {VISEMES[v].name}", {"visemes": (v, 0, 63, 0)}) for v in PREVIEW_VISEMES]
+    poses.append(("low-level FAPs", {"faps": FIG13_FAPS}))
     images, labels = [], []
     for who, face in (("source", source), ("target", target)):
         for name, pose in poses:
-            frames = face.pose({}, pose.get("visemes"), pose.get("expressions"))
+            frames = face.pose(pose.get("faps", {}), pose.get("visemes"), pose.get("expressions"))
             images.append(render_face(face, frames, size=size, view="three-quarter"))
             labels.append(f"{who}: {name}")
-    save_png(path, render_grid(images, labels, cols=len(poses)))
+    save_png(path, render_grid(images, labels, cols=len(poses) // 2))

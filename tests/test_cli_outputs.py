@@ -95,3 +95,16 @@ def test_every_command_has_help_with_an_example():
     for cmd in ("validate", "info", "clone", "play", "convert", "render", "demo"):
         r = run(cmd, "--help")
         assert r.exit_code == 0 and "Examples:" in r.output, cmd
+
+
+def test_an_unexpected_error_is_one_line(monkeypatch, tmp_path):
+    import mpeg4fba.render.preview as preview
+
+    def boom(*a, **k):
+        raise RuntimeError("the renderer broke")
+
+    monkeypatch.setattr(preview, "render_face", boom)
+    r = run("render", "--example", "-o", tmp_path / "x.png")
+    assert r.exit_code == 1
+    assert r.stderr.strip().count("\n") == 0 and "RuntimeError: the renderer broke" in r.stderr
+    assert "Traceback" not in r.stderr + r.output

@@ -48,6 +48,14 @@ class _Group(click.Group):
                 traceback.print_exc(file=sys.stderr)
             click.echo(f"mpeg4fba: error: {_one_line(e)}", err=True)
             ctx.exit(1)
+        except (click.exceptions.Exit, click.ClickException, click.Abort, KeyboardInterrupt):
+            raise
+        except Exception as e:  # noqa: BLE001 - a bug of ours: still one line, no traceback
+            if ctx.params.get("verbose") or (ctx.obj or {}).get("verbose"):
+                traceback.print_exc(file=sys.stderr)
+            click.echo(f"mpeg4fba: error: {type(e).__name__}: {_one_line(e)} (an internal "
+                       f"error; --verbose shows where)", err=True)
+            ctx.exit(1)
 
 
 @click.group(cls=_Group, context_settings={"help_option_names": ["-h", "--help"]})

@@ -441,22 +441,29 @@ class FacialMotionCloner:
 
     def _skin_table(self, out: FaceModel, borders: np.ndarray, block: np.ndarray) -> list:
         """FaceDefMesh entries of the target skin from its motion at the non-zero borders."""
-        meshes = []
-        if block.shape[1] == 0:
-            return meshes
-        norm = np.linalg.norm(block, axis=2).max(axis=1)
-        top = norm.max() if len(norm) else 0.0
+        return self._entries(out, self.tgt.offsets, borders, block)
+
+    def _entries(self, out: FaceModel, offsets: dict, borders: np.ndarray,
+                 motion: np.ndarray) -> list:
+        """FaceDefMesh entries, one per mesh of ``offsets`` (name -> (first row, count)),
+        from world motion [rows, non-zero borders, 3]; vertices moving less than
+        ``min_motion`` of the largest motion are left out."""
+        if motion.shape[1] == 0 or not len(motion):
+            return []
+        norm = np.linalg.norm(motion, axis=2).max(axis=1)
+        top = norm.max()
         if top <= 0:
-            return meshes
+            return []
         keep = norm > self.min_motion * top
-        for name, (first, n) in self.tgt.offsets.items():
+        entries = []
+        for name, (first, n) in offsets.items():
             sel = np.flatnonzero(keep[first:first + n])
             if not len(sel):
                 continue
             R = _linear(out, out.meshes[name].parent)
-            d = block[first + sel] @ np.linalg.inv(R).T
-            meshes.append(FaceDefMesh(name, borders, sel, _intervals(borders, d)))
-        return meshes
+            local = motion[first + sel] @ np.linalg.inv(R).T
+            entries.append(FaceDefMesh(name, borders, sel, _intervals(borders, local)))
+        return entries
 
     # -- eyes, teeth, tongue, head ------------------------------------------------------------
     def _shared_parts(self) -> list:
@@ -595,20 +602,7 @@ class FacialMotionCloner:
         d = np.asarray(w @ s)
         if self.scale_motion:
             d = d * np.tile(self.tgt.space.normaliser.factors(xt), (1, k))
-        d = d.reshape(len(d), k, 3)
-        norm = np.linalg.norm(d, axis=2).max(axis=1)
-        top = norm.max() if len(norm) else 0.0
-        result = []
-        if top <= 0:
-            return result
-        for name, (first, n) in t_offsets.items():
-            sel = np.flatnonzero(norm[first:first + n] > self.min_motion * top)
-            if not len(sel):
-                continue
-            R = _linear(out, out.meshes[name].parent)
-            local = d[first + sel] @ np.linalg.inv(R).T
-            result.append(FaceDefMesh(name, borders, sel, _intervals(borders, local)))
-        return result
+        return self._entries(out, t_offsets, borders, d.reshape(len(d), k, 3))
 
     def _part_map(self, part: str) -> tuple:
         if part not in self._part_maps:

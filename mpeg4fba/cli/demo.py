@@ -116,7 +116,7 @@ def demo(out_dir: str, quick: bool) -> None:
     for name, what in (("target.wrl", "the cloned face, FAT-bearing VRML97"),
                        ("target.glb", "the same as glTF, animated by the demo phrase"),
                        ("player.html", "open it in a browser to watch it talk"),
-                       ("preview.png", "both heads: neutral, six expressions, four visemes"),
+                       ("preview.png", "both heads: neutral, six expressions, four visemes, low-level FAPs"),
                        ("demo_phrase.fap", "the FAP stream"),
                        ("report.txt", "validation and timings")):
         click.echo(f"  {name:16s} {what}")

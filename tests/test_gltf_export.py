@@ -516,3 +516,27 @@ def test_khronos_validator_accepts_pivots_and_embedded_buffers(tmp_path, node_en
     write_glb(_rig(), path, FapStream.from_values({48: [0, 5000, -80], 49: [0, 3000, -2000],
                                                    50: [0, -7000, 4000]}, fps=10))
     _validate(path, node_env)
+
+
+def test_our_glb_reads_back_as_the_same_fat(tmp_path):
+    """Interval-named targets (open_jaw[0,4320]) rebuild the tables exactly; the FAPs that
+    only turn Transforms are not morph targets and do not come back."""
+    from mpeg4fba.formats.morph_targets import read_morph_face
+
+    face = reference_head(resolution=0.5)
+    path = tmp_path / "head.glb"
+    write_glb(face, path)
+    back = read_morph_face(path)
+    mesh_faps = {t.fap for t in face.fat if t.fap > 2 and t.meshes}
+    assert set(back.fat.faps) == mesh_faps
+    assert len(back.fat.visemes) == 14 and len(back.fat.expressions) == 6
+    for key in [(3, 0), (5, 0), (19, 0), (44, 0), (1, 4), (2, 6)]:
+        a, b = face.fat[key], back.fat[key]
+        for m in a.meshes:
+            n = next(x for x in b.meshes if x.mesh == m.mesh)
+            assert np.array_equal(n.borders, m.borders)
+            full = np.zeros((len(face.meshes[m.mesh].vertices), m.n_intervals, 3))
+            full[m.indices] = m.displacements
+            got = np.zeros_like(full)
+            got[n.indices] = n.displacements
+            assert np.allclose(got, full, atol=1e-7)

@@ -56,7 +56,7 @@ from typing import Mapping, Optional, Sequence, Union
 import numpy as np
 
 from ..fba.face import FaceMesh, FaceModel, FaceTransform
-from ..fba.morph import MorphTarget, fat_from_morph_targets
+from ..fba.morph import FULL_SHAPE, MorphTarget, fat_from_morph_targets
 from ..vrml.walk import fan_triangulate
 from .errors import FormatError
 
@@ -584,12 +584,65 @@ def _target(text: str, meshes: dict, name: str, path: str, mapped: bool) -> Morp
 
 # -- the set -------------------------------------------------------------------------------
 
+#: A target named after one FAT interval, as our glTF writer names them:
+#: ``open_jaw[0,1024]``, ``viseme:PP[0,63]``, ``raise_b_midlip[-512,0]#2``.
+_INTERVAL = re.compile(r"^(?P<key>[^\[\]]+)\[(?P<lo>-?\d+(?:\.\d+)?),(?P<hi>-?\d+(?:\.\d+)?)\](?:#\d+)?$")
+
+
+def _interval_targets(neutral: "_Shapes", path: str) -> tuple:
+    """(targets, other names): the FAT-interval targets of a glTF file (see
+    :mod:`mpeg4fba.formats.gltf`) turned back into morph targets at each interval border,
+    so :func:`fat_from_morph_targets` rebuilds the same tables; names that are not
+    intervals are returned for the ordinary path."""
+    groups: dict = {}
+    others = []
+    for tname, meshes in neutral.targets.items():
+        m = _INTERVAL.match(tname)
+        if m is None:
+            others.append(tname)
+            continue
+        lo, hi = float(m["lo"]), float(m["hi"])
+        if not lo < hi or (lo < 0 < hi):
+            raise FormatError(f"glTF morph target {tname!r}: [{m['lo']},{m['hi']}] is not an "
+                              f"interval on one side of 0", path)
+        key = m["key"].strip()
+        for mesh, shape in meshes.items():
+            groups.setdefault(key, {}).setdefault(mesh, []).append(
+                (lo, hi, shape - neutral.meshes[mesh][0]))
+    targets = []
+    for key, per_mesh in groups.items():
+        borders = sorted({b for items in per_mesh.values() for lo, hi, _ in items for b in (lo, hi)})
+        values = [b for b in borders if b != 0]
+        full = {m: np.repeat(v[None], len(values), axis=0) for m, (v, _) in neutral.meshes.items()}
+        for mesh, items in per_mesh.items():
+            # each target is its interval's whole displacement, walked outward from 0
+            for lo, hi, d in items:
+                for k, b in enumerate(values):
+                    if (hi > 0 and b >= hi) or (lo < 0 and b <= lo):
+                        full[mesh][k] += d
+        for k, b in enumerate(values):
+            shapes = {mesh: arr[k] for mesh, arr in full.items()}
+            high = key.lower().startswith(("viseme:", "expression:"))
+            try:
+                if high:
+                    if b != FULL_SHAPE:
+                        continue
+                    targets.append(MorphTarget(key, None, shapes, name=f"{key} (in {path})"))
+                else:
+                    targets.append(MorphTarget(key, b, shapes, name=f"{key}@{b:g} (in {path})"))
+            except ValueError as e:
+                raise FormatError(f"glTF morph target {key!r}: {e}", path) from None
+    return targets, others
+
+
 def _read(neutral_path: PathLike, target_paths: Sequence[PathLike], mapping, lenient: bool):
     names = read_mapping(mapping)
     neutral = _shapes(neutral_path, lenient, with_targets=True)
-    targets = []
     np_str = str(neutral_path)
-    for tname, meshes in neutral.targets.items():
+    targets, plain = _interval_targets(neutral, np_str)
+    ours = bool(targets)
+    for tname in plain:
+        meshes = neutral.targets[tname]
         full = {m: meshes.get(m, v) for m, (v, _) in neutral.meshes.items()}
         text = names.get(tname)
         label = f"{tname} (in {os.path.basename(np_str)})"
@@ -613,7 +666,7 @@ def _read(neutral_path: PathLike, target_paths: Sequence[PathLike], mapping, len
         mapped = text is not None
         targets.append(_target(text if mapped else target_stem(p), meshes,
                                os.path.basename(p), p, mapped))
-    return neutral, targets
+    return neutral, targets, ours
 
 
 def read_morph_targets(neutral_path: PathLike, target_paths: Sequence[PathLike] = (),
@@ -627,7 +680,7 @@ def read_morph_targets(neutral_path: PathLike, target_paths: Sequence[PathLike] 
     where its name does not say it.  ``lenient`` reads VRML with unknown nodes (warns).
     FormatError naming the file for unreadable files and names that say nothing.
     """
-    neutral, targets = _read(neutral_path, target_paths, mapping, lenient)
+    neutral, targets, _ = _read(neutral_path, target_paths, mapping, lenient)
     return {m: v for m, (v, _) in neutral.meshes.items()}, targets
 
 
@@ -636,9 +689,11 @@ def read_morph_face(neutral_path: PathLike, target_paths: Sequence[PathLike] = (
                     lenient: bool = False, name: Optional[str] = None) -> FaceModel:
     """A FaceModel: the neutral's meshes (with their VRML Transforms or glTF nodes) and a
     FAT built from the targets (see :func:`read_morph_targets`)."""
-    neutral, targets = _read(neutral_path, target_paths, mapping, lenient)
+    neutral, targets, ours = _read(neutral_path, target_paths, mapping, lenient)
     base = {m: v for m, (v, _) in neutral.meshes.items()}
-    fat = fat_from_morph_targets(base, targets, tol=tol)
+    # targets rebuilt from a FAT's intervals are in the neutral's order by construction
+    # (and may move a small part far: no vertex-order guess)
+    fat = fat_from_morph_targets(base, targets, tol=tol, **({"order_check": None} if ours else {}))
     meshes = [FaceMesh(m, v, t, neutral.parents.get(m)) for m, (v, t) in neutral.meshes.items()]
     return FaceModel(meshes, neutral.transforms, fat=fat,
                      name=name or target_stem(neutral_path))

@@ -216,10 +216,11 @@ class FacialMotionCloner:
         filtered[points] = False
 
         zq = self.aligned_depth if self.overlap == "nearest" else None
+        radius = self._support(support)
 
         def weights(rows: np.ndarray, triangles: np.ndarray) -> sp.csr_matrix:
             out = antialiased_weights(src_uv, triangles, self.aligned[rows], depth,
-                                      support=support, samples=samples, exact=exact,
+                                      support=radius[rows], samples=samples, exact=exact,
                                       query_depth=None if zq is None else zq[rows],
                                       slack=_NEAREST_SLACK)
             plain = np.flatnonzero(~filtered[rows])
@@ -275,6 +276,21 @@ class FacialMotionCloner:
             fine = np.ptp(src.uv[corners][:, :, 0], axis=1) < np.pi
             self.aligned[rows[fine]] = uv[fine]
             self.aligned_depth[rows[fine]] = depth[fine]
+
+    def _support(self, support: float) -> np.ndarray:
+        """Per target vertex radius of the anti-aliasing filter: ``support``, shrinking
+        to 0 at the corners of the slits (mouth and eye corners), where both sides of a
+        slit meet and a filter of full size would average the two."""
+        radius = np.full(len(self.aligned), float(support))
+        if support <= 0 or not self.slits:
+            return radius
+        for slit in self.slits:
+            for corner in (slit.upper[0], slit.upper[-1]):
+                if corner not in self.src.space.ids:
+                    continue
+                d = np.hypot(*(self.aligned - self.src.space.point_uv(corner)).T)
+                radius = np.minimum(radius, np.maximum(d - support, 0.0))
+        return radius
 
     def _mesh_groups(self) -> list:
         """(target skin rows, source skin mesh indices they take motion from) per target mesh.

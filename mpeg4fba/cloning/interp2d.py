@@ -53,7 +53,7 @@ array([ 7.5, 10. ])
 """
 from __future__ import annotations
 
-from typing import Optional
+from typing import Optional, Union
 
 import numpy as np
 import scipy.sparse as sp
@@ -372,7 +372,7 @@ def antialiased_weights(
     queries: np.ndarray,
     depth: Optional[np.ndarray] = None,
     *,
-    support: float = 0.02,
+    support: Union[float, np.ndarray] = 0.02,
     samples: int = 8,
     chunk: int = 4096,
     k_nearest: Optional[int] = 16,
@@ -385,7 +385,8 @@ def antialiased_weights(
     The weights are the average of the plain interpolation weights at the query
     itself and at ``samples`` points evenly spaced on the circle of radius
     ``support`` around it (angles ``2*pi*i/samples``), each of the ``samples+1``
-    points with equal weight.  Rows sum to 1; ``support=0`` gives the plain
+    points with equal weight (``support`` may also be one radius per query).  Rows
+    sum to 1; ``support=0`` gives the plain
     weights.
 
     >>> pts = np.array([[0., 0.], [1., 0.], [0., 1.]])
@@ -397,9 +398,10 @@ def antialiased_weights(
     nq = q.shape[0]
     samples = max(0, int(samples))
     ang = 2.0 * np.pi * np.arange(samples) / max(samples, 1)
-    off = np.vstack([np.zeros((1, 2)), float(support) * np.column_stack([np.cos(ang), np.sin(ang)])])
-    s = off.shape[0]
-    qq = (q[:, None, :] + off[None, :, :]).reshape(-1, 2)
+    unit = np.vstack([np.zeros((1, 2)), np.column_stack([np.cos(ang), np.sin(ang)])])
+    s = unit.shape[0]
+    radius = np.broadcast_to(np.asarray(support, dtype=float).reshape(-1), (nq,))
+    qq = (q[:, None, :] + radius[:, None, None] * unit[None, :, :]).reshape(-1, 2)
     zq = None if query_depth is None else np.repeat(np.asarray(query_depth, dtype=float), s)
     w = interpolation_weights(points, triangles, qq, depth, chunk=chunk, k_nearest=k_nearest,
                               exact=exact, query_depth=zq, slack=slack)

@@ -312,3 +312,26 @@ def test_paper_rules_are_available(source, target):
         FacialMotionCloner(source, target, outside="far")
     with pytest.raises(ValueError, match="overlap"):
         FacialMotionCloner(source, target, overlap="back")
+
+
+def test_cli_clone_onto_a_mesh_with_a_feature_point_sidecar(tmp_path):
+    """Bring your own face: a plain mesh file and a JSON sidecar of its feature points."""
+    from click.testing import CliRunner
+
+    from mpeg4fba.cli import main
+    from mpeg4fba.formats.fpjson import write_feature_points_json
+    from mpeg4fba.formats.wrl_face import save_face
+
+    head = reference_head(resolution=0.5, face_width=1.1, seed=6)
+    dumb = flattened(head)
+    points = dumb.points
+    dumb.points = FeaturePointSet()
+    save_face(dumb, tmp_path / "mine.wrl")
+    write_feature_points_json(points, tmp_path / "mine.json")
+    out = tmp_path / "mine_animated.wrl"
+    r = CliRunner().invoke(main, ["clone", str(tmp_path / "mine.wrl"), "--target-points",
+                                  str(tmp_path / "mine.json"), "-o", str(out)])
+    assert r.exit_code == 0, r.output
+    assert "66 FAPs, 14 visemes, 6 expressions" in r.output and "0 errors" in r.output
+    animated = fba.load_face(out)
+    assert len(animated.fat.faps) == 66 and "Head" in animated.transforms

@@ -11,7 +11,7 @@ import scipy.sparse as sp
 import mpeg4fba as fba
 from mpeg4fba.cloning import (LOWER, REQUIRED_POINTS, UPPER, CloneWarning, FacialMotionCloner,
                               clone, find_parts)
-from mpeg4fba.cloning.rigid import axis_angle, sphere_centre
+from mpeg4fba.cloning.rigid import sphere_centre
 from mpeg4fba.fba.face import FaceMesh, FaceModel
 from mpeg4fba.fba.fat import FAT, FaceDefMesh, FaceDefTable, rotation_matrices
 from mpeg4fba.fba.featurepoints import FeaturePointError, FeaturePointSet
@@ -245,7 +245,6 @@ def test_rigid_mesh_motion_becomes_a_transform():
     hinge = np.asarray(jaw.center)
     angle = np.radians(20.0)
     R = rotation_matrices((1, 0, 0), [angle])[0]
-    teeth = src.meshes["LowerTeeth"]
     world = src.world_vertices("LowerTeeth")
     moved = (world - hinge) @ R.T + hinge
     table = FaceDefTable(3, [FaceDefMesh("LowerTeeth", [0, 1000], np.arange(len(world)),

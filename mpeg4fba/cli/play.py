@@ -32,7 +32,7 @@ import click
 
 from . import main, warnings_to_stderr
 
-__all__ = ["play", "load_face_arg", "load_stream_arg"]
+__all__ = ["play", "load_face_arg", "load_stream_arg", "parse_size"]
 
 _GLTF = (".glb", ".gltf")
 _VRML = (".wrl", ".wrz", ".wrl.gz")
@@ -59,6 +59,16 @@ def load_stream_arg(path: Optional[str], demo: bool):
         return demo_stream()
     from ..formats.fap import read_fap
     return read_fap(path)
+
+
+def parse_size(size: str) -> tuple:
+    """(width, height) from a ``--size`` value such as ``480x560``."""
+    try:
+        w, h = (int(v) for v in size.lower().split("x"))
+        return w, h
+    except ValueError:
+        raise click.BadParameter(f"{size!r}: expected WIDTHxHEIGHT, e.g. 480x560",
+                                 param_hint="--size") from None
 
 
 def _frames(spec: Optional[str], n: int) -> range:
@@ -119,10 +129,7 @@ def play(files: tuple, output: str, example: bool, demo_stream: bool, frames: Op
 def _png_frames(face, stream, folder: str, frames: range, size: str, view: str) -> None:
     from ..render.preview import render_face, save_png
 
-    try:
-        w, h = (int(v) for v in size.lower().split("x"))
-    except ValueError:
-        raise click.BadParameter(f"{size!r}: expected WIDTHxHEIGHT, e.g. 480x560") from None
+    w, h = parse_size(size)
     out = Path(folder)
     out.mkdir(parents=True, exist_ok=True)
     playback = face.play(stream)

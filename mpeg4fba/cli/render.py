@@ -25,7 +25,7 @@ from typing import Optional
 import click
 
 from . import main, warnings_to_stderr
-from .play import load_face_arg
+from .play import load_face_arg, parse_size
 
 __all__ = ["render"]
 
@@ -52,15 +52,6 @@ def _pose(faps: tuple, viseme: Optional[int], expression: Optional[int]) -> dict
     return pose
 
 
-def _size(size: str) -> tuple:
-    try:
-        w, h = (int(v) for v in size.lower().split("x"))
-        return w, h
-    except ValueError:
-        raise click.BadParameter(f"{size!r}: expected WIDTHxHEIGHT, e.g. 480x560",
-                                 param_hint="--size") from None
-
-
 @main.command(epilog="\b\nExamples:\n  mpeg4fba render face.wrl -o face.png"
                      "\n  mpeg4fba render face.wrl --fap open_jaw=800 --expression 1 -o joy.png"
                      "\n  mpeg4fba render face.wrl --turntable 8 -o turntable.png"
@@ -85,7 +76,7 @@ def render(face: Optional[str], output: str, example: bool, faps: tuple, viseme:
     """Render FACE (neutral or posed) to a PNG: one view, a turntable or a cloning grid."""
     from ..render.preview import render_face, render_grid, save_png
 
-    w, h = _size(size)
+    w, h = parse_size(size)
     pose = _pose(faps, viseme, expression)
     with warnings_to_stderr():
         subject = load_face_arg(face, example)

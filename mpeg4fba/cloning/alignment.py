@@ -207,7 +207,6 @@ def align(target: FaceSpace, source: FaceSpace,
             # eyelids, ...) go onto the source's too, the triangulation's ones stay put
             first = target.points_uv(extra)
             first = first + np.asarray(alignment_weights(target, ids, tris, first) @ moved)
-            every = list(ids) + extra
             at = np.vstack([source.points_uv(ids), first])
             residual = np.vstack([np.zeros((len(ids), 2)), source.points_uv(extra) - first])
             second = delaunay_triangles(at)

@@ -42,13 +42,13 @@ from __future__ import annotations
 
 import dataclasses
 import warnings
-from typing import Mapping, Optional, Sequence, Union
+from typing import Optional, Sequence, Union
 
 import numpy as np
 import scipy.sparse as sp
 from scipy.spatial import cKDTree
 
-from ..fba.face import FaceMesh, FaceModel, FaceTransform
+from ..fba.face import FaceModel, FaceTransform
 from ..fba.fat import FAT, FaceDefMesh, FaceDefTable, FaceDefTransform, interval_weights
 from ..fba.featurepoints import FeaturePointError, point_order
 from ..fba.stream import FapStream
@@ -172,6 +172,8 @@ class FacialMotionCloner:
         self.rigid_tolerance = float(rigid_tolerance)
         self.min_motion = float(min_motion)
         self.source_parts = find_parts(source)
+        # the Transform carrying each source part's motion (None: its meshes move alone)
+        self.source_transforms = {p: source_transform(source, m) for p, m in self.source_parts.items()}
         self.target_parts = find_parts(target)
         self.src = _Skin(source, self.source_parts, positions, mouth_angle)
         self.tgt = _Skin(target, self.target_parts, positions, mouth_angle)
@@ -206,7 +208,7 @@ class FacialMotionCloner:
     # -- the skin ---------------------------------------------------------------------------
     def _weights(self, tris, support, samples, exact) -> sp.csr_matrix:
         src_uv, depth = self.src.space.uv, self.src.space.depth
-        nt, ns = len(self.aligned), len(src_uv)
+        nt = len(self.aligned)
 
         # the target's feature point vertices take the unfiltered interpolation, so each
         # FAP moves its feature point by exactly what it moves the source's (the filter
@@ -436,7 +438,7 @@ class FacialMotionCloner:
 
     def _transform_skin_motion(self, table: FaceDefTable, nz: np.ndarray):
         """Skin motion from a Transform that is not a part's (a jaw carrying a chin mesh)."""
-        part_transforms = {source_transform(self.source, m) for m in self.source_parts.values()}
+        part_transforms = set(self.source_transforms.values())
         movers = [t.transform for t in table.transforms if t.transform not in part_transforms]
         if not movers:
             return None
@@ -482,19 +484,15 @@ class FacialMotionCloner:
         return entries
 
     # -- eyes, teeth, tongue, head ------------------------------------------------------------
-    def _shared_parts(self) -> list:
-        names = [p.name for p in PARTS] + [HEAD]
-        return [n for n in names if n in self.source_parts and n in self.target_parts]
-
     def _part_transforms(self, table: FaceDefTable, borders: np.ndarray, inst: "_Installer") -> list:
         """Target FaceDefTransforms for the source's part Transforms this table drives."""
         out, seen = [], set()
         for part, meshes in self.source_parts.items():
-            ts = source_transform(self.source, meshes)
+            ts = self.source_transforms[part]
             entries = [e for e in table.transforms if e.transform == ts]
             if ts is None or not entries:
                 continue
-            if part != HEAD and ts == source_transform(self.source, self.source_parts[HEAD]):
+            if part != HEAD and ts == self.source_transforms[HEAD]:
                 continue  # the head's transform moves this part; it is mapped as the head's
             if part not in self.target_parts:
                 inst.note(f"the target has no {part} (no mesh holds feature point "
@@ -730,7 +728,7 @@ class _Installer:
 
     def _head_moves(self) -> bool:
         src = self.cloner.source
-        ts = source_transform(src, self.cloner.source_parts[HEAD])
+        ts = self.cloner.source_transforms[HEAD]
         return ts is not None and any(e.transform == ts for t in src.fat for e in t.transforms)
 
     def _unique(self, base: str) -> str:

@@ -315,6 +315,10 @@ class LocalFrameCloner:
         from ..fba.morph import FULL_SHAPE, MorphTarget, TargetKey
         from .fmc import _borders
 
+        to_local = {}         # mesh -> (inverse linear part, translation) of its world matrix
+        for m in self.meshes:
+            M = self.target.world_matrix(self.target.meshes[m].parent)[0]
+            to_local[m] = (np.linalg.inv(M[:3, :3]), M[:3, 3])
         targets = []
         for table in sorted(self.source.fat, key=lambda t: t.key):
             high = table.fap <= 2
@@ -331,10 +335,7 @@ class LocalFrameCloner:
             shapes = self.clone_keys(keys)
             key = TargetKey(table.fap, table.select if high else 0)
             for value, shape in zip(values, shapes):
-                local = {}
-                for m in self.meshes:
-                    M = self.target.world_matrix(self.target.meshes[m].parent)[0]
-                    local[m] = (shape[m] - M[:3, 3]) @ np.linalg.inv(M[:3, :3]).T
+                local = {m: (shape[m] - t) @ inv.T for m, (inv, t) in to_local.items()}
                 targets.append(MorphTarget(key, None if high else float(value), local))
         return targets
 

@@ -8,8 +8,6 @@ feature points: the pieces of the cloner's surface alignment (:mod:`~mpeg4fba.cl
 """
 from __future__ import annotations
 
-from typing import Optional
-
 import numpy as np
 from scipy.spatial import cKDTree
 

@@ -22,7 +22,6 @@ from __future__ import annotations
 
 import os
 import warnings
-from pathlib import Path
 from typing import Optional, Union
 
 from ..fba.compliance import Finding, Report, check_fap_ratios, check_fat

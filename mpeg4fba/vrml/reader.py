@@ -30,7 +30,7 @@ from typing import Any, Optional, Union
 import numpy as np
 from lark import Lark
 from lark.lexer import Lexer
-from lark.exceptions import UnexpectedInput, UnexpectedToken, VisitError
+from lark.exceptions import UnexpectedInput, VisitError
 
 from .errors import Source, VRMLError
 from .fields import FIELD_TYPES, FieldType, NumberError, parse_numbers, unquote_string

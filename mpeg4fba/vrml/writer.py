@@ -135,7 +135,7 @@ class _Writer:
         return name
 
     def proto(self, p: Proto, level: int) -> list:
-        ind, ind1 = _indent(level), _indent(level + 1)
+        ind = _indent(level)
         ops = [ind + f"PROTO {p.name} [\n"]
         for d in p.fields.values():
             ops.extend(self.declaration(d, None, level + 1))

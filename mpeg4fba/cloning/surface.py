@@ -1,5 +1,6 @@
-"""Closest points on triangle meshes, and the 3D warp of one face onto another by its
-feature points: the pieces of the cloner's surface alignment (:mod:`~mpeg4fba.cloning.fmc`).
+"""Closest points on triangle meshes, the 3D warp of one face onto another by its
+feature points, and the pinning of one neck cut onto another: the pieces of the cloner's
+surface alignment (:mod:`~mpeg4fba.cloning.fmc`).
 
 >>> V = np.array([[0.0, 0, 0], [1, 0, 0], [0, 1, 0]]); T = np.array([[0, 1, 2]])
 >>> t, b, d = closest_points(np.array([[0.2, 0.2, 1.0], [2.0, 0.0, 0.0]]), V, T)
@@ -8,10 +9,16 @@ feature points: the pieces of the cloner's surface alignment (:mod:`~mpeg4fba.cl
 """
 from __future__ import annotations
 
+from collections import defaultdict
+from typing import Optional
+
 import numpy as np
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
 from scipy.spatial import cKDTree
 
-__all__ = ["closest_points", "point_triangle", "feature_warp"]
+__all__ = ["closest_points", "point_triangle", "feature_warp", "boundary_loops", "neck_cut",
+           "loop_correspondence", "surface_biharmonic"]
 
 
 def point_triangle(p: np.ndarray, tri: np.ndarray) -> tuple:
@@ -109,3 +116,139 @@ def feature_warp(moving: np.ndarray, fixed: np.ndarray, points: np.ndarray) -> n
     warp = RBFInterpolator(m[keep], f[keep] - m[keep], kernel="thin_plate_spline")
     p = np.asarray(points, dtype=np.float64)
     return p + warp(p)
+
+
+def boundary_loops(triangles: np.ndarray) -> list:
+    """The closed chains of boundary edges (edges of a single triangle) of a mesh, each an
+    array of vertex indices in order; open chains (at non-manifold vertices) are dropped.
+
+    >>> [l.tolist() for l in boundary_loops(np.array([[0, 1, 2], [0, 2, 3]]))]
+    [[0, 1, 2, 3]]
+    """
+    T = np.asarray(triangles, dtype=np.int64).reshape(-1, 3)
+    e = T[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2)
+    if not len(e):
+        return []
+    _, inverse, count = np.unique(np.sort(e, axis=1), axis=0, return_inverse=True,
+                                  return_counts=True)
+    b = e[count[inverse.ravel()] == 1]
+    starting = defaultdict(list)
+    for k, a in enumerate(b[:, 0].tolist()):
+        starting[a].append(k)
+    used = np.zeros(len(b), dtype=bool)
+    loops = []
+    # a walk per loop: boundary edges are few (the rims of the holes), not per vertex
+    for first in range(len(b)):
+        if used[first]:
+            continue
+        chain, k = [], first
+        while True:
+            used[k] = True
+            chain.append(int(b[k, 0]))
+            nxt = [j for j in starting[int(b[k, 1])] if not used[j]]
+            if int(b[k, 1]) == chain[0] or not nxt:
+                break
+            k = nxt[0]
+        if int(b[k, 1]) == chain[0] and len(chain) >= 3:
+            loops.append(np.array(chain, dtype=np.int64))
+    return loops
+
+
+def neck_cut(vertices: np.ndarray, triangles: np.ndarray, chin: np.ndarray,
+             axis: np.ndarray) -> Optional[np.ndarray]:
+    """The boundary loop where a head mesh is cut off at the neck, or None.
+
+    ``vertices`` in the face frame (y up); the cut is the lowest boundary loop that winds
+    once round the vertical line through ``axis`` (the top of the spine, 7.1) and lies,
+    on average, below ``chin`` (2.1): a hole of the face (a mouth, an eye) winds round
+    no such line, and a face mask's rim is not below its chin.
+    """
+    V = np.asarray(vertices, dtype=np.float64)
+    best, best_y = None, np.inf
+    for loop in boundary_loops(triangles):
+        p = V[loop]
+        y = float(p[:, 1].mean())
+        if y >= float(chin[1]) or y >= best_y:
+            continue
+        a = np.arctan2(p[:, 0] - axis[0], p[:, 2] - axis[2])
+        turns = np.diff(np.append(a, a[0]))
+        turns = (turns + np.pi) % (2 * np.pi) - np.pi
+        if abs(round(float(turns.sum()) / (2 * np.pi))) == 1:
+            best, best_y = loop, y
+    return best
+
+
+def loop_correspondence(moving: np.ndarray, fixed: np.ndarray) -> np.ndarray:
+    """For each point of the closed loop ``moving`` (n, 3), the point of the closed loop
+    ``fixed`` (m, 3) at the same angle round the vertical line through each loop's
+    centroid (the loops of two neck cuts: star-shaped about that line), interpolated
+    along ``fixed``'s vertices."""
+    def angles(p):
+        c = p.mean(axis=0)
+        return np.arctan2(p[:, 0] - c[0], p[:, 2] - c[2])
+
+    f = np.asarray(fixed, dtype=np.float64)
+    a = angles(f)
+    order = np.argsort(a)
+    a, f = a[order], f[order]
+    a3 = np.concatenate([a - 2 * np.pi, a, a + 2 * np.pi])
+    f3 = np.vstack([f, f, f])
+    want = angles(np.asarray(moving, dtype=np.float64))
+    return np.stack([np.interp(want, a3, f3[:, j]) for j in range(3)], axis=1)
+
+
+def _cotangent_laplacian(V: np.ndarray, T: np.ndarray) -> tuple:
+    """(L, lumped vertex areas): the cotangent Laplacian, with negative cotangents
+    (obtuse angles) and those of slivers clamped, so a decimated mesh's thin triangles
+    can't make the operator indefinite or explode."""
+    n = len(V)
+    rows, cols, vals = [], [], []
+    area = np.zeros(n)
+    for k in range(3):
+        i, j, o = T[:, k], T[:, (k + 1) % 3], T[:, (k + 2) % 3]
+        a, b = V[i] - V[o], V[j] - V[o]
+        cross = np.linalg.norm(np.cross(a, b), axis=1)
+        cot = np.clip((a * b).sum(axis=1) / np.maximum(cross, 1e-300), 0.0, 1e3) / 2
+        rows += [i, j]
+        cols += [j, i]
+        vals += [cot, cot]
+        np.add.at(area, i, cross / 6)
+    W = sp.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
+                      shape=(n, n))
+    L = sp.diags(np.asarray(W.sum(axis=1)).ravel()) - W
+    positive = area[area > 0]
+    floor = positive.mean() * 1e-6 if len(positive) else 1.0
+    return L.tocsr(), np.maximum(area, floor)
+
+
+def surface_biharmonic(vertices: np.ndarray, triangles: np.ndarray, fixed: np.ndarray,
+                       values: np.ndarray) -> np.ndarray:
+    """The smoothest field over the surface (least bilaplacian energy, cotangent weights)
+    equal to ``values`` (k, d) at the vertices ``fixed`` (k,): the surface analogue of a
+    thin-plate spline, so it follows the mesh round the neck and under the chin rather
+    than through the air.  Vertices of a piece of the mesh holding no fixed vertex get 0.
+
+    >>> V = np.array([[0.0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0], [5, 0, 0], [6, 0, 0], [5, 1, 0]])
+    >>> T = np.array([[0, 1, 3], [0, 3, 2], [4, 5, 6]])
+    >>> (np.round(surface_biharmonic(V, T, np.array([0]), np.array([[2.0]])), 6) + 0.0).ravel().tolist()
+    [2.0, 2.0, 2.0, 2.0, 0.0, 0.0, 0.0]
+    """
+    V = np.asarray(vertices, dtype=np.float64)
+    T = np.asarray(triangles, dtype=np.int64).reshape(-1, 3)
+    fixed = np.asarray(fixed, dtype=np.int64)
+    values = np.asarray(values, dtype=np.float64).reshape(len(fixed), -1)
+    n = len(V)
+    out = np.zeros((n, values.shape[1]))
+    out[fixed] = values
+    free = np.setdiff1d(np.arange(n), fixed)
+    if not len(free) or not len(fixed):
+        return out
+    L, area = _cotangent_laplacian(V, T)
+    Q = (L.T @ sp.diags(1.0 / area) @ L).tocsr()
+    Qff = Q[free][:, free]
+    # a whisper of pull towards 0 keeps pieces without a fixed vertex solvable
+    eps = 1e-9 * float(Qff.diagonal().mean() or 1.0)
+    solve = spla.factorized((Qff + eps * sp.eye(len(free))).tocsc())
+    rhs = -(Q[free][:, fixed] @ values)
+    out[free] = np.stack([solve(rhs[:, j]) for j in range(rhs.shape[1])], axis=1)
+    return out

@@ -142,23 +142,29 @@ def test_lip_regions_follow_the_lips(source):
     assert np.mean(regions[source.regions["lips_upper"]] == UPPER) > 0.8
 
 
+def _other_lip_motion(source, target, **options) -> float:
+    """Largest motion of the target's lip opposite the one a FAP moves, relative."""
+    c = FacialMotionCloner(source, target, **options)
+    first = c.target_skin["Skin"][0]
+    worst = 0.0
+    for fap, other in ((5, "lips_upper"), (4, "lips_lower")):
+        truth = _world_motion(source, (fap, 0), 512)
+        motion = np.zeros((len(c.src.vertices), 3))
+        for name, (f, n) in c.source_skin.items():
+            motion[f:f + n] = truth[name]
+        got = c.map_skin(motion)[first + target.regions[other]]
+        worst = max(worst, np.abs(got).max() / np.abs(motion).max())
+    return worst
+
+
 def test_without_lip_treatment_the_lips_pull_each_other(source, target):
     """A FAP moving one lip leaves the other lip's inner contour still, only with the
-    lip regions (on a different face, where the contours don't coincide with the source's)."""
-    moved = {}
-    for flag in (True, False):
-        c = FacialMotionCloner(source, target, lips=flag)
-        first = c.target_skin["Skin"][0]
-        worst = 0.0
-        for fap, other in ((5, "lips_upper"), (4, "lips_lower")):
-            truth = _world_motion(source, (fap, 0), 512)
-            motion = np.zeros((len(c.src.vertices), 3))
-            for name, (f, n) in c.source_skin.items():
-                motion[f:f + n] = truth[name]
-            got = c.map_skin(motion)[first + target.regions[other]]
-            worst = max(worst, np.abs(got).max() / np.abs(motion).max())
-        moved[flag] = worst
-    assert moved[True] < 1e-9 and moved[False] > 0.1
+    lip regions, in the paper's 2D alignment (on a different face, where the contours
+    don't coincide with the source's); the default surface alignment puts each lip on
+    its own and keeps the regions too."""
+    assert _other_lip_motion(source, target, alignment="paper", lips=True) < 1e-9
+    assert _other_lip_motion(source, target, alignment="paper", lips=False) > 0.1
+    assert _other_lip_motion(source, target) < 1e-9
 
 
 def _fresh(face):
@@ -277,10 +283,15 @@ def test_options_are_checked(source, target):
         FacialMotionCloner(source, target, positions="sideways")
     with pytest.raises(ValueError, match="triangulation"):
         FacialMotionCloner(source, target, triangulation="voronoi")
+    with pytest.raises(ValueError, match="interpolation must be one of"):
+        FacialMotionCloner(source, target, interpolation="cubic")
+    with pytest.raises(ValueError, match='needs alignment="surface"'):
+        FacialMotionCloner(source, target, alignment="paper", interpolation="surface")
 
 
 @pytest.mark.parametrize("options", [dict(positions="regional"), dict(triangulation="delaunay"),
-                                     dict(scale_motion=False)])
+                                     dict(scale_motion=False), dict(interpolation="2d"),
+                                     dict(register=False), dict(alignment="paper")])
 def test_variants_still_clone_everything(source, target, options):
     out, _ = quiet(clone, source, target, **options)
     assert len(out.fat) == len(source.fat)
@@ -304,8 +315,8 @@ def test_eyelid_margins_are_told_apart(source):
 
 def test_paper_rules_are_available(source, target):
     """overlap="front" (smallest depth) and outside="global" (closest triangle among all)
-    are the paper's letter; both still give a compliant face."""
-    out, _ = quiet(clone, source, target, overlap="front", outside="global")
+    are the paper's letter for its 2D interpolation; both still give a compliant face."""
+    out, _ = quiet(clone, source, target, alignment="paper", overlap="front", outside="global")
     assert validate(out).ok
     with pytest.raises(ValueError, match="outside"):
         FacialMotionCloner(source, target, outside="far")

@@ -5,7 +5,8 @@ import numpy as np
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from mpeg4fba.cloning.surface import closest_points, feature_warp, point_triangle
+from mpeg4fba.cloning.surface import (boundary_loops, closest_points, feature_warp, point_triangle,
+                                      register_surface, surface_weights, triangle_neighbours)
 from mpeg4fba.models import reference_head
 
 
@@ -60,3 +61,77 @@ def test_feature_warp_is_exact_at_the_points_and_smooth():
     pts = rng.normal(size=(5, 3))
     out = feature_warp(moving[:30], moving[:30] @ A.T + 0.3, pts)
     assert np.allclose(out, pts @ A.T + 0.3, atol=1e-8)
+
+
+# -- neighbours, weights on the surface, registration ----------------------------------------
+def bumpy_tube(centre: float, rings: int = 41, around: int = 32, height: float = 4.0):
+    """An open cylinder (radius 1 round the y axis, y from 0 down to -height) with a
+    ring-shaped bulge (a crease to slide on) at y = -centre: (V, T)."""
+    a = np.linspace(0, 2 * np.pi, around, endpoint=False)
+    ys = np.linspace(0.0, -height, rings)
+    r = 1 + 0.3 * np.exp(-((ys + centre) / 0.3) ** 2)
+    V = np.array([[ri * np.sin(t), y, ri * np.cos(t)] for y, ri in zip(ys, r) for t in a])
+    tris = []
+    for i in range(rings - 1):
+        for j in range(around):
+            p, q = i * around + j, i * around + (j + 1) % around
+            tris += [[p, q + around, q], [p, p + around, q + around]]
+    return V, np.array(tris)
+
+
+def test_triangle_neighbours_are_mutual():
+    skin = reference_head(resolution=0.5).meshes["Skin"]
+    T = skin.triangles
+    near = triangle_neighbours(T)
+    has = near >= 0
+    t, k = np.nonzero(has)
+    n = near[t, k]
+    # the neighbour lists this triangle back, and they share the edge opposite corner k
+    assert (near[n] == t[:, None]).any(axis=1).all()
+    edge = np.sort(np.stack([T[t, (k + 1) % 3], T[t, (k + 2) % 3]], 1), axis=1)
+    shared = np.array([np.intersect1d(T[a], T[b]) for a, b in zip(t[:200], n[:200])])
+    assert np.array_equal(np.sort(shared, axis=1), edge[:200])
+    # boundary edges (the mouth and eye openings) have none
+    assert (~has).sum() == sum(len(l) for l in boundary_loops(T))
+
+
+@settings(max_examples=30, deadline=None)
+@given(st.floats(0.0, 0.15), st.integers(3, 12), st.floats(-1.0, 1.0), st.floats(-1.0, 1.0))
+def test_surface_weights_keep_a_linear_field_on_a_plane(radius, samples, a, b):
+    # rows sum to 1, and on a plane the filter's circle averages a linear field to its
+    # centre value, however many triangles the circle crosses
+    x, y = np.meshgrid(np.linspace(0, 1, 9), np.linspace(0, 1, 9))
+    V = np.stack([x.ravel(), y.ravel(), np.zeros(81)], 1)
+    k = np.arange(81).reshape(9, 9)[:-1, :-1].ravel()
+    T = np.concatenate([np.stack([k, k + 1, k + 10], 1), np.stack([k, k + 10, k + 9], 1)])
+    rng = np.random.default_rng(samples)
+    P = np.column_stack([rng.uniform(0.2, 0.8, (20, 2)), rng.normal(scale=0.1, size=20)])
+    W = surface_weights(P, V, T, radius, samples)
+    assert np.allclose(np.asarray(W.sum(axis=1)).ravel(), 1)
+    field = a * V[:, 0] + b * V[:, 1]
+    assert np.allclose(W @ field, a * P[:, 0] + b * P[:, 1], atol=1e-9)
+
+
+def test_surface_weights_stop_at_the_rim():
+    V = np.array([[0.0, 0, 0], [1, 0, 0], [0, 1, 0]])
+    W = surface_weights(np.array([[0.05, 0.05, 0]]), V, np.array([[0, 1, 2]]), radius=0.5)
+    assert np.allclose(W.sum(), 1) and (W.data >= 0).all()
+
+
+def test_registration_slides_a_surface_along_itself():
+    # source: a bulge at depth 2; target: the same tube with its bulge at 2.3, held at
+    # both rims.  Closest points leave the target's bulge where it is (they only move a
+    # vertex across the surface); the fit slides it onto the source's
+    src, T = bumpy_tube(2.0)
+    tgt, _ = bumpy_tube(2.3)
+    rims = np.concatenate([np.arange(32), np.arange(len(tgt) - 32, len(tgt))])
+    peak = np.flatnonzero(np.isclose(tgt[:, 1], -2.3, atol=0.06))
+    out = register_surface(tgt, T, tgt, rims, src, T)
+    t, b, _ = closest_points(tgt[peak], src, T)
+    projected = np.einsum("nk,nkc->nc", b, src[T[t]])
+    assert np.abs(projected[:, 1] + 2.3).max() < 0.1                  # did not move
+    assert np.abs(out[peak, 1] + 2.0).max() < 0.1                       # slid to the bulge
+    assert np.allclose(out[rims], tgt[rims])
+    # and the result lies on the source surface
+    _, _, d = closest_points(out, src, T)
+    assert d.max() < 0.02

@@ -60,10 +60,11 @@ from .parts import (HEAD, PARTS, find_parts, lowest_common_transform, source_tra
 from .projection import MOUTH_ANGLE
 from .rigid import axis_angle, fit_rigid, rotation_centre, sphere_centre
 from .surface import (closest_points, feature_warp, loop_correspondence, neck_cut,
-                      surface_biharmonic)
+                      register_surface, surface_biharmonic, surface_weights)
 
 __all__ = ["clone", "FacialMotionCloner", "CloneWarning", "required_points_missing",
-           "OVERLAP_RULES", "OUTSIDE_RULES", "METHODS", "ALIGNMENTS", "NECK_RATIO"]
+           "OVERLAP_RULES", "OUTSIDE_RULES", "METHODS", "ALIGNMENTS", "NECK_RATIO",
+           "INTERPOLATIONS"]
 
 _SPEC = {p.name: p for p in PARTS}
 
@@ -95,17 +96,41 @@ OUTSIDE_RULES = ("nearby", "global")
 
 #: How the target is aligned on the source.  "paper": the paper's alignment alone (feature
 #: points onto the source's, the rest pulled by interpolation over the feature point
-#: triangulation, in 2D).  "surface" (the default) then refines it in 3D: the target's
-#: normalised vertices are warped by the thin-plate spline that takes its feature points
-#: onto the source's, and each goes to the 2D position of the closest point of the
-#: source's surface (of its mesh group).  2D interpolation between feature points can't
-#: see how a surface seen edge-on by the projection (under the chin, the neck) differs
-#: between two faces; the closest point can.  On ICT identities onto a decimated skin it
-#: takes the mean error from 0.17 to 0.10 % of the eye distance, the largest from 26 to
-#: 4.8 %, and leaves no triangle flipped beyond the truth's.
-#: With ``neck=True`` (the default) the warp is first corrected so the two faces' neck
-#: cuts meet (:data:`NECK_RATIO`).
+#: triangulation, in 2D).  "surface" (the default) then places the target on the
+#: source's surface in 3D, in the normalised space, in four steps:
+#:
+#: 1. the thin-plate spline that takes the target's feature points onto the source's
+#:    warps all its skin vertices (:func:`~mpeg4fba.cloning.surface.feature_warp`);
+#: 2. with ``neck=True``, the neck cuts are pinned onto each other (:data:`NECK_RATIO`);
+#: 3. with ``register=True``, the target's main skin is fitted onto the source's by a
+#:    non-rigid ICP whose stiffness relaxes from the size of the face to a sixteenth of
+#:    it, feature points and neck cut held
+#:    (:func:`~mpeg4fba.cloning.surface.register_surface`).  The warp is exact only at
+#:    the feature points; between them a surface can end up at the right place but
+#:    slid along itself (a throat displaced down the neck, the underside of the chin
+#:    shifted back), which a closest point can't see and the fit corrects, since a
+#:    slid surface no longer matches the source's where it bends;
+#: 4. each vertex goes to its closest point on the source's surface (of its mesh
+#:    group), whose 2D position is its aligned position for the lip and eyelid regions.
+#:
+#: 2D interpolation between feature points can't see how a surface seen edge-on by the
+#: projection (under the chin, the neck) differs between two faces; the 3D steps can.
 ALIGNMENTS = ("surface", "paper")
+
+#: Where the target's weights over the source's vertices come from.  "2d": the paper's
+#: interpolation in the 2D projection at the aligned position (overlaps resolved by
+#: :data:`OVERLAP_RULES`, points outside all triangles by :data:`OUTSIDE_RULES`), with
+#: the anti-aliasing filter around it in 2D.  "surface" (the default with the surface
+#: alignment): the barycentric weights of the closest point on the source's surface
+#: itself, and the filter on the surface (points on a circle of radius ``support`` round
+#: it, in the normalised space where the eye separation is 1, carried over the mesh:
+#: :func:`~mpeg4fba.cloning.surface.surface_weights`).  The cylindrical projection
+#: squeezes the neck and the underside of the chin near its axis, where a small error in
+#: 2D is a large one on the surface and depth no longer tells surfaces apart; the
+#: surface weights take the motion from where the alignment put the vertex.  The lip and
+#: eyelid rule holds in both: a vertex of one side takes nothing from source triangles
+#: wholly on the other side.
+INTERPOLATIONS = ("surface", "2d")
 
 #: Neck cuts: no feature point lies below the chin, so the warp guesses how the target's
 #: neck lies along the source's, and a longer neck slides down the shorter one (on ICT,
@@ -116,11 +141,10 @@ ALIGNMENTS = ("surface", "paper")
 #: neck), and the difference spreads over the target's surface as the smoothest
 #: (bilaplacian) field that is 0 at every feature point: the neck stretches evenly
 #: between the jaw and the cut.  Two cuts whose distances below the chin differ by more
-#: than this factor are not taken to be the same place (a bust against a head), and the
-#: neck is left to the warp, with a :class:`CloneWarning`.  On ICT onto a decimated
-#: skin, pinning takes the mean error from 0.097 to 0.064 % of the eye distance and the
-#: largest from 4.8 to 2.9 %.
-NECK_RATIO = 1.5
+#: than this factor (in the normalised space) are not taken to be the same place (a
+#: bust against a head), and the neck is left to the warp, with a :class:`CloneWarning`.
+#: ICT identities' cuts, the same place on the same mesh, differ by up to 1.5 there.
+NECK_RATIO = 2.0
 
 
 class CloneWarning(UserWarning):
@@ -165,7 +189,9 @@ class FacialMotionCloner:
     regions) and ``eyelids`` (the same for the eyelids, :mod:`~mpeg4fba.cloning.lips`); ``by_mesh`` (map meshes to their counterparts, :meth:`_mesh_groups`; False:
     every target skin mesh from all the source's, the paper's single face mesh);
     ``alignment`` (:data:`ALIGNMENTS`); ``neck`` (pin the neck cuts onto each other,
-    :data:`NECK_RATIO`); ``overlap`` (:data:`OVERLAP_RULES`); ``outside`` (:data:`OUTSIDE_RULES`); ``rigid_tolerance`` (how far a part's mesh motion may be from rigid, as a
+    :data:`NECK_RATIO`); ``register`` (fit the target's skin onto the source's, step 3 of
+    :data:`ALIGNMENTS`); ``interpolation`` (:data:`INTERPOLATIONS`; by default "surface"
+    with the surface alignment, "2d" with the paper's); ``overlap`` (:data:`OVERLAP_RULES`); ``outside`` (:data:`OUTSIDE_RULES`); ``rigid_tolerance`` (how far a part's mesh motion may be from rigid, as a
     fraction of its size, to become a Transform motion); ``min_motion`` (target vertices
     moving less than this fraction of a table's largest motion are left out of it).
     """
@@ -176,7 +202,8 @@ class FacialMotionCloner:
                  eyelids: bool = True,
                  mouth_angle: float = MOUTH_ANGLE, rigid_tolerance: float = 0.05,
                  min_motion: float = 1e-3, outside: str = "nearby", overlap: str = "nearest",
-                 by_mesh: bool = True, alignment: str = "surface", neck: bool = True):
+                 by_mesh: bool = True, alignment: str = "surface", neck: bool = True,
+                 register: bool = True, interpolation: Optional[str] = None):
         _check_faces(source, target)
         if outside not in OUTSIDE_RULES:
             raise ValueError(f"outside must be one of {OUTSIDE_RULES}, not {outside!r}")
@@ -201,20 +228,33 @@ class FacialMotionCloner:
         if alignment not in ALIGNMENTS:
             raise ValueError(f"alignment must be one of {ALIGNMENTS}, not {alignment!r}")
         self.alignment = alignment
+        if interpolation is None:
+            interpolation = "surface" if alignment == "surface" else "2d"
+        if interpolation not in INTERPOLATIONS:
+            raise ValueError(f"interpolation must be one of {INTERPOLATIONS}, not {interpolation!r}")
+        if interpolation == "surface" and alignment != "surface":
+            raise ValueError('interpolation="surface" needs alignment="surface" (the target '
+                             "placed on the source's surface in 3D)")
+        self.interpolation = interpolation
         self.neck = bool(neck)
+        self.register = bool(register)
         #: whether the neck cuts were pinned onto each other (:data:`NECK_RATIO`)
         self.neck_pinned = False
+        #: with alignment="surface": the target's skin vertices placed on the source's
+        #: surface, in the source's normalised space (None with the paper's alignment)
+        self.surface_points: Optional[np.ndarray] = None
         self.aligned, self.aligned_depth, self.alignment_ids, self.alignment_triangles = align(
             self.tgt.space, self.src.space, triangulation)
         if alignment == "surface":
             self._surface_align()
         self.source_regions = self.target_regions = None
         tris = self.src.triangles
-        # a triangle wrapping round the back of the head (across angle +-pi) would cover
-        # the whole face in 2D
         uv = self.src.space.uv
-        spread = np.ptp(uv[tris][:, :, 0], axis=1)
-        tris = tris[spread < np.pi]
+        if interpolation == "2d":
+            # a triangle wrapping round the back of the head (across angle +-pi) would
+            # cover the whole face in 2D
+            spread = np.ptp(uv[tris][:, :, 0], axis=1)
+            tris = tris[spread < np.pi]
         self.slits = (LIPS,) * bool(lips) + SLITS[1:] * bool(eyelids)
         if self.slits:
             pts = {k: self.src.space.point_uv(k) for k in self.src.space.ids}
@@ -241,8 +281,15 @@ class FacialMotionCloner:
 
         zq = self.aligned_depth if self.overlap == "nearest" else None
         radius = self._support(support)
+        source_3d = self.src.space.normalise(self.src.vertices)
+
+        def on_surface(rows: np.ndarray, triangles: np.ndarray) -> sp.csr_matrix:
+            r = np.where(filtered[rows], radius[rows], 0.0)
+            return surface_weights(self.surface_points[rows], source_3d, triangles, r, samples)
 
         def weights(rows: np.ndarray, triangles: np.ndarray) -> sp.csr_matrix:
+            if self.interpolation == "surface":
+                return on_surface(rows, triangles)
             out = antialiased_weights(src_uv, triangles, self.aligned[rows], depth,
                                       support=radius[rows], samples=samples, exact=exact,
                                       query_depth=None if zq is None else zq[rows],
@@ -285,8 +332,12 @@ class FacialMotionCloner:
         moving = tgt.normalise(np.array([self.target.points[i] for i in common]))
         fixed = src.normalise(np.array([self.source.points[i] for i in common]))
         warped = feature_warp(moving, fixed, tgt.normalise(tgt.vertices))
+        cut = None
         if self.neck:
-            warped = self._pin_neck(warped)
+            warped, cut = self._pin_neck(warped)
+        if self.register:
+            warped = self._register(warped, cut)
+        self.surface_points = warped
         source_3d = src.normalise(src.vertices)
         tris = self.src.triangles
         tri_mesh = self.src.mesh_index[tris[:, 0]]
@@ -304,18 +355,19 @@ class FacialMotionCloner:
             self.aligned_depth[rows[fine]] = depth[fine]
 
     def _pin_neck(self, warped: np.ndarray) -> np.ndarray:
-        """``warped`` (the target's skin in the source's normalised space) corrected so
-        the target's neck cut lies on the source's (see :data:`NECK_RATIO`)."""
+        """(``warped`` corrected so the target's neck cut lies on the source's, the cut's
+        rows in the target's main skin or None) for ``warped``, the target's skin in the
+        source's normalised space (see :data:`NECK_RATIO`)."""
         cuts = []
         for skin, face in ((self.src, self.source), (self.tgt, self.target)):
             if skin.main is None:
-                return warped
+                return warped, None
             first, n = skin.offsets[skin.main]
             v = skin.space.normalise(skin.vertices[first:first + n])
             chin, axis = skin.space.normalise(np.array([face.points["2.1"], face.points["7.1"]]))
             loop = neck_cut(v, face.meshes[skin.main].triangles, chin, axis)
             if loop is None:
-                return warped
+                return warped, None
             cuts.append((first, n, v, loop, chin[1] - v[loop, 1].mean()))
         (_, _, vs, ls, drop_s), (ft, nt, vt, lt, drop_t) = cuts
         if not 1 / NECK_RATIO <= drop_t / drop_s <= NECK_RATIO:
@@ -323,7 +375,7 @@ class FacialMotionCloner:
                           f"{drop_s:.2f} and {drop_t:.2f} (normalised) below the chin: too "
                           "far apart to be the same place, the necks are left unpinned",
                           CloneWarning, stacklevel=3)
-            return warped
+            return warped, None
         residual = loop_correspondence(vt[lt], vs[ls]) - warped[ft + lt]
         points = self.tgt.point_vertices()
         points = points[(points >= ft) & (points < ft + nt)] - ft
@@ -334,6 +386,26 @@ class FacialMotionCloner:
         out[ft:ft + nt] += surface_biharmonic(vt, self.target.meshes[self.tgt.main].triangles,
                                               rows, values)
         self.neck_pinned = True
+        return out, lt
+
+    def _register(self, warped: np.ndarray, cut: Optional[np.ndarray]) -> np.ndarray:
+        """``warped`` with the target's main skin fitted onto the source's main skin
+        (:func:`~mpeg4fba.cloning.surface.register_surface`), its feature points and its
+        neck cut (rows of the main skin, when pinned) held."""
+        if self.src.main is None or self.tgt.main is None:
+            return warped
+        ft, nt = self.tgt.offsets[self.tgt.main]
+        fs, ns = self.src.offsets[self.src.main]
+        points = self.tgt.point_vertices()
+        held = points[(points >= ft) & (points < ft + nt)] - ft
+        if cut is not None:
+            held = np.union1d(held, cut)
+        out = warped.copy()
+        out[ft:ft + nt] = register_surface(
+            self.tgt.space.normalise(self.tgt.vertices[ft:ft + nt]),
+            self.target.meshes[self.tgt.main].triangles, warped[ft:ft + nt], held,
+            self.src.space.normalise(self.src.vertices[fs:fs + ns]),
+            self.source.meshes[self.src.main].triangles)
         return out
 
     def _support(self, support: float) -> np.ndarray:

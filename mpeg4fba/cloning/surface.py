@@ -10,7 +10,7 @@ surface alignment (:mod:`~mpeg4fba.cloning.fmc`).
 from __future__ import annotations
 
 from collections import defaultdict
-from typing import Optional
+from typing import Optional, Union
 
 import numpy as np
 import scipy.sparse as sp
@@ -18,7 +18,15 @@ import scipy.sparse.linalg as spla
 from scipy.spatial import cKDTree
 
 __all__ = ["closest_points", "point_triangle", "feature_warp", "boundary_loops", "neck_cut",
-           "loop_correspondence", "surface_biharmonic"]
+           "loop_correspondence", "surface_biharmonic", "vertex_normals", "register_surface",
+           "REGISTRATION_SCALES", "surface_weights", "triangle_neighbours"]
+
+#: The stiffness schedule of :func:`register_surface`: the length scales (in the units of
+#: the vertices; the cloner's normalised space, where the eye separation is 1) over which
+#: the fit may bend, coarse to fine.  Measured on ICT identities (benchmarks/bench_clone_ict.py):
+#: starting stiffer changes nothing, stopping at a finer scale lets the fit follow the
+#: source's mesh facets.
+REGISTRATION_SCALES = (1.0, 0.5, 0.25, 0.125, 0.0625)
 
 
 def point_triangle(p: np.ndarray, tri: np.ndarray) -> tuple:
@@ -251,4 +259,185 @@ def surface_biharmonic(vertices: np.ndarray, triangles: np.ndarray, fixed: np.nd
     solve = spla.factorized((Qff + eps * sp.eye(len(free))).tocsc())
     rhs = -(Q[free][:, fixed] @ values)
     out[free] = np.stack([solve(rhs[:, j]) for j in range(rhs.shape[1])], axis=1)
+    return out
+
+
+def vertex_normals(vertices: np.ndarray, triangles: np.ndarray) -> np.ndarray:
+    """(n, 3) unit normals, the area-weighted mean of the incident triangles' (0 for a
+    vertex in no triangle)."""
+    V = np.asarray(vertices, dtype=np.float64)
+    T = np.asarray(triangles, dtype=np.int64).reshape(-1, 3)
+    face = np.cross(V[T[:, 1]] - V[T[:, 0]], V[T[:, 2]] - V[T[:, 0]])
+    n = np.zeros_like(V)
+    for k in range(3):
+        np.add.at(n, T[:, k], face)
+    length = np.linalg.norm(n, axis=1, keepdims=True)
+    return np.divide(n, length, out=np.zeros_like(n), where=length > 0)
+
+
+def register_surface(rest: np.ndarray, triangles: np.ndarray, start: np.ndarray,
+                     fixed: np.ndarray, surface_vertices: np.ndarray,
+                     surface_triangles: np.ndarray, *,
+                     scales: tuple = REGISTRATION_SCALES, iterations: int = 4) -> np.ndarray:
+    """The vertices of a mesh (``rest`` (n, 3), ``triangles``) moved from ``start`` onto a
+    surface, keeping the rows ``fixed`` where ``start`` has them: a non-rigid ICP.
+
+    For each length scale l of ``scales`` in turn, ``iterations`` times: every vertex's
+    nearest point on the surface is found, and the positions X minimise
+    ``l**4 * |bilaplacian of (X - rest)|**2 + |X - nearest|**2`` (both integrated over the
+    mesh, cotangent weights and vertex areas), so X follows the surface while the
+    displacement from ``rest`` stays smooth at scales above l.  Where the surface has a
+    crease or a bend (under the chin, round the jaw) that pulls the neighbouring smooth
+    stretches along, which a per-vertex closest point can't: it only moves a vertex
+    across the surface, never along it.  The nearest points are the tangent-plane
+    projections at the nearest surface vertex (exact to second order in the mesh
+    spacing, and a k-d tree query instead of a triangle search).
+
+    >>> V = np.array([[0.0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0]]); T = np.array([[0, 1, 3], [0, 3, 2]])
+    >>> out = register_surface(V, T, V + [0.2, 0, 0.5], np.array([], dtype=int), V, T)
+    >>> (np.round(out - V, 6) + 0.0).tolist()[0]   # onto the plane z=0, free to slide along it
+    [0.2, 0.0, 0.0]
+    """
+    R = np.asarray(rest, dtype=np.float64)
+    T = np.asarray(triangles, dtype=np.int64).reshape(-1, 3)
+    X = np.array(start, dtype=np.float64)
+    n = len(R)
+    used = np.zeros(n, dtype=bool)
+    used[np.unique(T)] = True
+    held = np.zeros(n, dtype=bool)
+    held[np.asarray(fixed, dtype=np.int64)] = True
+    free = np.flatnonzero(used & ~held)
+    kept = np.flatnonzero(used & held)
+    if not len(free) or not len(T):
+        return X
+    SV = np.asarray(surface_vertices, dtype=np.float64)
+    ST = np.asarray(surface_triangles, dtype=np.int64).reshape(-1, 3)
+    on = np.unique(ST)
+    tree = cKDTree(SV[on])
+    normals = vertex_normals(SV, ST)[on]
+    L, area = _cotangent_laplacian(R, T)
+    Q = (L.T @ sp.diags(1.0 / area) @ L).tocsr()
+    Qff = Q[free][:, free]
+    pull = Q[free][:, kept] @ (X[kept] - R[kept])
+    m = area[free]
+    for scale in scales:
+        stiff = float(scale) ** 4
+        solve = spla.factorized((stiff * Qff + sp.diags(m)).tocsc())
+        base = stiff * (Qff @ R[free] - pull)
+        for _ in range(int(iterations)):
+            _, k = tree.query(X[free])
+            p = SV[on[k]]
+            nrm = normals[k]
+            near = X[free] - ((X[free] - p) * nrm).sum(axis=1, keepdims=True) * nrm
+            rhs = base + m[:, None] * near
+            X[free] = np.stack([solve(rhs[:, j]) for j in range(3)], axis=1)
+    return X
+
+
+def triangle_neighbours(triangles: np.ndarray) -> np.ndarray:
+    """(m, 3) index of the triangle across the edge opposite each corner (-1 on a
+    boundary, or where more than two triangles share the edge).
+
+    >>> triangle_neighbours(np.array([[0, 1, 2], [2, 1, 3]])).tolist()
+    [[1, -1, -1], [-1, -1, 0]]
+    """
+    T = np.asarray(triangles, dtype=np.int64).reshape(-1, 3)
+    m = len(T)
+    out = np.full((m, 3), -1, dtype=np.int64)
+    if not m:
+        return out
+    # the edge opposite corner k joins corners k+1 and k+2
+    a = np.concatenate([T[:, 1], T[:, 2], T[:, 0]])
+    b = np.concatenate([T[:, 2], T[:, 0], T[:, 1]])
+    tri = np.tile(np.arange(m), 3)
+    corner = np.repeat(np.arange(3), m)
+    key = np.minimum(a, b) * (int(T.max()) + 1) + np.maximum(a, b)
+    order = np.argsort(key, kind="stable")
+    k = key[order]
+    first = np.ones(len(k), dtype=bool)
+    first[1:] = k[1:] != k[:-1]
+    group = np.cumsum(first) - 1
+    size = np.bincount(group)
+    pair = size[group] == 2
+    # in a group of two, each member's neighbour is the other
+    start = np.flatnonzero(first)
+    other = np.where(np.arange(len(k)) == start[group], start[group] + 1, start[group])
+    sel = order[pair]
+    out[tri[sel], corner[sel]] = tri[order[other[pair]]]
+    return out
+
+
+def _plane_barycentric(P: np.ndarray, tri: np.ndarray) -> np.ndarray:
+    """Barycentric coordinates of the projections of ``P`` (n, 3) on the planes of
+    ``tri`` (n, 3, 3); negative outside the triangle."""
+    a = tri[:, 0]
+    e1, e2, d = tri[:, 1] - a, tri[:, 2] - a, P - a
+    d00, d01, d11 = (e1 * e1).sum(1), (e1 * e2).sum(1), (e2 * e2).sum(1)
+    d20, d21 = (d * e1).sum(1), (d * e2).sum(1)
+    den = d00 * d11 - d01 * d01
+    den = np.where(np.abs(den) > 0, den, np.inf)
+    v = (d11 * d20 - d01 * d21) / den
+    w = (d00 * d21 - d01 * d20) / den
+    return np.stack([1 - v - w, v, w], axis=1)
+
+
+def surface_weights(points: np.ndarray, vertices: np.ndarray, triangles: np.ndarray,
+                    radius: Union[float, np.ndarray] = 0.0, samples: int = 8,
+                    steps: int = 8) -> sp.csr_matrix:
+    """(len(points), len(vertices)) interpolation weights over a mesh at the closest
+    point of each of ``points``, anti-aliased: the average with ``samples`` points on
+    the circle of ``radius`` (one per point, or one for all) round it in the plane of
+    its triangle, each carried over the mesh by walking across edges (up to ``steps``
+    triangles; past a boundary it stops at the rim).  The paper's filter, on the surface
+    rather than in the 2D projection.  Rows sum to 1.
+
+    >>> V = np.array([[0.0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0]]); T = np.array([[0, 1, 2], [2, 1, 3]])
+    >>> surface_weights(np.array([[0.2, 0.2, 0.3]]), V, T).toarray().round(6).tolist()
+    [[0.6, 0.2, 0.2, 0.0]]
+    >>> w = surface_weights(np.array([[0.45, 0.45, 0.0]]), V, T, radius=0.2, samples=4)
+    >>> w.toarray().round(6).tolist()   # two samples cross into the second triangle
+    [[0.14, 0.41, 0.41, 0.04]]
+    """
+    P = np.asarray(points, dtype=np.float64).reshape(-1, 3)
+    V = np.asarray(vertices, dtype=np.float64)
+    T = np.asarray(triangles, dtype=np.int64).reshape(-1, 3)
+    n = len(P)
+    t, b, _ = closest_points(P, V, T)
+    rows, cols, vals = [np.repeat(np.arange(n), 3)], [T[t].ravel()], [b.ravel()]
+    r = np.broadcast_to(np.asarray(radius, dtype=np.float64).reshape(-1), (n,))
+    filtered = np.flatnonzero(r > 0) if samples > 0 else np.zeros(0, dtype=np.int64)
+    share = np.ones(n)
+    if len(filtered):
+        share[filtered] = 1.0 / (samples + 1)
+        corners = V[T[t[filtered]]]
+        q = np.einsum("nk,nkc->nc", b[filtered], corners)
+        normal = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+        normal /= np.maximum(np.linalg.norm(normal, axis=1, keepdims=True), 1e-300)
+        e1 = corners[:, 1] - corners[:, 0]
+        e1 -= (e1 * normal).sum(1, keepdims=True) * normal
+        e1 /= np.maximum(np.linalg.norm(e1, axis=1, keepdims=True), 1e-300)
+        e2 = np.cross(normal, e1)
+        angle = 2 * np.pi * np.arange(samples) / samples
+        offset = (np.cos(angle)[None, :, None] * e1[:, None] + np.sin(angle)[None, :, None] * e2[:, None])
+        S = (q[:, None] + r[filtered, None, None] * offset).reshape(-1, 3)
+        cur = np.repeat(t[filtered], samples)
+        near = triangle_neighbours(T)
+        for _ in range(int(steps)):
+            bary = _plane_barycentric(S, V[T[cur]])
+            worst = bary.argmin(axis=1)
+            nxt = near[cur, worst]
+            move = (bary[np.arange(len(S)), worst] < -1e-12) & (nxt >= 0)
+            if not move.any():
+                break
+            cur[move] = nxt[move]
+        bary = np.clip(_plane_barycentric(S, V[T[cur]]), 0.0, None)
+        total = bary.sum(axis=1, keepdims=True)
+        bary = np.where(total > 0, bary / np.where(total > 0, total, 1), 1.0 / 3.0)
+        rows.append(np.repeat(np.repeat(filtered, samples), 3))
+        cols.append(T[cur].ravel())
+        vals.append(bary.ravel() / (samples + 1))
+    vals[0] = vals[0] * np.repeat(share, 3)
+    out = sp.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
+                        shape=(n, len(V)))
+    out.sum_duplicates()
     return out

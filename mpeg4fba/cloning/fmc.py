@@ -69,12 +69,14 @@ __all__ = ["clone", "FacialMotionCloner", "CloneWarning", "required_points_missi
 _SPEC = {p.name: p for p in PARTS}
 
 
-#: How overlapping source triangles are chosen between: "front", the smallest depth (the
-#: outermost surface, the paper's rule), or "nearest" (the default), the surface whose
-#: depth is nearest the target vertex's own aligned depth, so hidden surfaces - the scalp
+#: (This and :data:`OUTSIDE_RULES` are rules of the 2D interpolation,
+#: ``interpolation="2d"``.)  How overlapping source triangles are chosen between:
+#: "front", the smallest depth (the outermost surface, the paper's rule), or "nearest"
+#: (the default), the surface whose depth is nearest the target vertex's own aligned depth, so hidden surfaces - the scalp
 #: under hair, the inside of the lips, under the chin - map to hidden surfaces.  On ICT
 #: identities (benchmarks/bench_clone_ict.py) "nearest" halves the mean error of "front"
-#: (0.118 against 0.219 % of the eye distance, same mesh, motion copied as is).
+#: (0.117 against 0.220 % of the eye distance, same mesh, paper's alignment, motion
+#: copied as is).
 OVERLAP_RULES = ("front", "nearest")
 #: With overlap="nearest", triangles passing this close (alignment-space units, about
 #: 0.6 mm on a human face) to a target point count among those holding it: a surface
@@ -104,7 +106,7 @@ OUTSIDE_RULES = ("nearby", "global")
 #: 2. with ``neck=True``, the neck cuts are pinned onto each other (:data:`NECK_RATIO`);
 #: 3. with ``register=True``, the target's main skin is fitted onto the source's by a
 #:    non-rigid ICP whose stiffness relaxes from the size of the face to a sixteenth of
-#:    it, feature points and neck cut held
+#:    it, feature points held
 #:    (:func:`~mpeg4fba.cloning.surface.register_surface`).  The warp is exact only at
 #:    the feature points; between them a surface can end up at the right place but
 #:    slid along itself (a throat displaced down the neck, the underside of the chin
@@ -115,6 +117,10 @@ OUTSIDE_RULES = ("nearby", "global")
 #:
 #: 2D interpolation between feature points can't see how a surface seen edge-on by the
 #: projection (under the chin, the neck) differs between two faces; the 3D steps can.
+#: On six pairs of ICT identities onto decimated skins (``benchmarks/bench_clone_ict.py
+#: --pairs``), the median of the largest errors falls from 26 % of the eye distance
+#: (paper) to 12 (steps 1 and 4 with 2D weights) and 3.3 (all four steps, surface
+#: weights), the mean error from 0.21 to 0.13 and 0.067 %.
 ALIGNMENTS = ("surface", "paper")
 
 #: Where the target's weights over the source's vertices come from.  "2d": the paper's
@@ -144,6 +150,13 @@ INTERPOLATIONS = ("surface", "2d")
 #: than this factor (in the normalised space) are not taken to be the same place (a
 #: bust against a head), and the neck is left to the warp, with a :class:`CloneWarning`.
 #: ICT identities' cuts, the same place on the same mesh, differ by up to 1.5 there.
+#: The pinned cut is where the registration (step 3) starts, not a constraint on it: two
+#: cuts do not correspond point for point as well as their angles round the neck say
+#: (on ICT, where both are the same vertices, pairing by angle is 4 to 14 % of the eye
+#: distance off on average), and holding them made the fit worse on four of six ICT
+#: pairs.  With the registration on, pinning changes ICT's figures little (six pairs:
+#: mean 0.0665 against 0.0673 % of the eye distance, 97 against 95 errors over 2 %);
+#: without it, it cuts the throat's errors (ICT 1 -> 2: largest 4.8 -> 2.9 %).
 NECK_RATIO = 2.0
 
 
@@ -332,11 +345,10 @@ class FacialMotionCloner:
         moving = tgt.normalise(np.array([self.target.points[i] for i in common]))
         fixed = src.normalise(np.array([self.source.points[i] for i in common]))
         warped = feature_warp(moving, fixed, tgt.normalise(tgt.vertices))
-        cut = None
         if self.neck:
-            warped, cut = self._pin_neck(warped)
+            warped = self._pin_neck(warped)
         if self.register:
-            warped = self._register(warped, cut)
+            warped = self._register(warped)
         self.surface_points = warped
         source_3d = src.normalise(src.vertices)
         tris = self.src.triangles
@@ -355,19 +367,18 @@ class FacialMotionCloner:
             self.aligned_depth[rows[fine]] = depth[fine]
 
     def _pin_neck(self, warped: np.ndarray) -> np.ndarray:
-        """(``warped`` corrected so the target's neck cut lies on the source's, the cut's
-        rows in the target's main skin or None) for ``warped``, the target's skin in the
-        source's normalised space (see :data:`NECK_RATIO`)."""
+        """``warped`` (the target's skin in the source's normalised space) corrected so
+        the target's neck cut lies on the source's (see :data:`NECK_RATIO`)."""
         cuts = []
         for skin, face in ((self.src, self.source), (self.tgt, self.target)):
             if skin.main is None:
-                return warped, None
+                return warped
             first, n = skin.offsets[skin.main]
             v = skin.space.normalise(skin.vertices[first:first + n])
             chin, axis = skin.space.normalise(np.array([face.points["2.1"], face.points["7.1"]]))
             loop = neck_cut(v, face.meshes[skin.main].triangles, chin, axis)
             if loop is None:
-                return warped, None
+                return warped
             cuts.append((first, n, v, loop, chin[1] - v[loop, 1].mean()))
         (_, _, vs, ls, drop_s), (ft, nt, vt, lt, drop_t) = cuts
         if not 1 / NECK_RATIO <= drop_t / drop_s <= NECK_RATIO:
@@ -375,7 +386,7 @@ class FacialMotionCloner:
                           f"{drop_s:.2f} and {drop_t:.2f} (normalised) below the chin: too "
                           "far apart to be the same place, the necks are left unpinned",
                           CloneWarning, stacklevel=3)
-            return warped, None
+            return warped
         residual = loop_correspondence(vt[lt], vs[ls]) - warped[ft + lt]
         points = self.tgt.point_vertices()
         points = points[(points >= ft) & (points < ft + nt)] - ft
@@ -386,20 +397,17 @@ class FacialMotionCloner:
         out[ft:ft + nt] += surface_biharmonic(vt, self.target.meshes[self.tgt.main].triangles,
                                               rows, values)
         self.neck_pinned = True
-        return out, lt
+        return out
 
-    def _register(self, warped: np.ndarray, cut: Optional[np.ndarray]) -> np.ndarray:
+    def _register(self, warped: np.ndarray) -> np.ndarray:
         """``warped`` with the target's main skin fitted onto the source's main skin
-        (:func:`~mpeg4fba.cloning.surface.register_surface`), its feature points and its
-        neck cut (rows of the main skin, when pinned) held."""
+        (:func:`~mpeg4fba.cloning.surface.register_surface`), its feature points held."""
         if self.src.main is None or self.tgt.main is None:
             return warped
         ft, nt = self.tgt.offsets[self.tgt.main]
         fs, ns = self.src.offsets[self.src.main]
         points = self.tgt.point_vertices()
         held = points[(points >= ft) & (points < ft + nt)] - ft
-        if cut is not None:
-            held = np.union1d(held, cut)
         out = warped.copy()
         out[ft:ft + nt] = register_surface(
             self.tgt.space.normalise(self.tgt.vertices[ft:ft + nt]),

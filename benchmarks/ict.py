@@ -60,6 +60,7 @@ from scipy.sparse.csgraph import connected_components
 
 from mpeg4fba.fba.face import FaceMesh, FaceModel
 from mpeg4fba.fba.featurepoints import FeaturePointSet
+from mpeg4fba.cloning.surface import vertex_normals  # noqa: F401  (re-exported)
 
 __all__ = ["IctData", "IctLayout", "load_ict", "shared_root", "ict_path", "identity",
            "mesh_layout", "ict_face", "ict_face_decimated", "split_deltas", "join",
@@ -177,18 +178,6 @@ def _adjacency(triangles: np.ndarray, n: int) -> sp.csr_matrix:
 def _components(triangles: np.ndarray, n: int) -> np.ndarray:
     """Connected component label of every vertex (isolated vertices are their own)."""
     return connected_components(_adjacency(triangles, n), directed=False)[1]
-
-
-def vertex_normals(vertices: np.ndarray, triangles: np.ndarray) -> np.ndarray:
-    """Area-weighted unit vertex normals (zero for vertices in no triangle)."""
-    V = np.asarray(vertices, dtype=np.float64)
-    T = np.asarray(triangles, dtype=np.int64).reshape(-1, 3)
-    fn = np.cross(V[T[:, 1]] - V[T[:, 0]], V[T[:, 2]] - V[T[:, 0]])
-    N = np.zeros_like(V)
-    for k in range(3):
-        np.add.at(N, T[:, k], fn)
-    norm = np.linalg.norm(N, axis=1, keepdims=True)
-    return np.divide(N, norm, out=np.zeros_like(N), where=norm > 0)
 
 
 def _triangle_normals(vertices: np.ndarray, triangles: np.ndarray) -> np.ndarray:

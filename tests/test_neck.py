@@ -17,6 +17,8 @@ from mpeg4fba.fba.fat import FAT
 from mpeg4fba.fba.featurepoints import FeaturePointSet
 from mpeg4fba.models import reference_head
 
+from _meshes import tube
+
 
 def grid(n=6):
     """An n x n vertex square of triangles in the xy plane: (V, T)."""
@@ -25,19 +27,6 @@ def grid(n=6):
     k = np.arange(n * n).reshape(n, n)[:-1, :-1].ravel()
     T = np.concatenate([np.stack([k, k + 1, k + n + 1], 1), np.stack([k, k + n + 1, k + n], 1)])
     return V, T
-
-
-def tube(rings=8, around=24, radius=1.0, top=0.0, bottom=-2.0):
-    """An open cylinder round the y axis: (V, T), the bottom ring last."""
-    a = np.linspace(0, 2 * np.pi, around, endpoint=False)
-    ys = np.linspace(top, bottom, rings)
-    V = np.array([[radius * np.sin(t), y, radius * np.cos(t)] for y in ys for t in a])
-    tris = []
-    for r in range(rings - 1):
-        for j in range(around):
-            p, q = r * around + j, r * around + (j + 1) % around
-            tris += [[p, q + around, q], [p, p + around, q + around]]
-    return V, np.array(tris)
 
 
 # -- boundary loops -------------------------------------------------------------------------

@@ -9,6 +9,8 @@ from mpeg4fba.cloning.surface import (boundary_loops, closest_points, feature_wa
                                       register_surface, surface_weights, triangle_neighbours)
 from mpeg4fba.models import reference_head
 
+from _meshes import tube
+
 
 def brute(p, V, T):
     """Closest point by sampling each triangle densely (reference, slow)."""
@@ -64,19 +66,10 @@ def test_feature_warp_is_exact_at_the_points_and_smooth():
 
 
 # -- neighbours, weights on the surface, registration ----------------------------------------
-def bumpy_tube(centre: float, rings: int = 41, around: int = 32, height: float = 4.0):
-    """An open cylinder (radius 1 round the y axis, y from 0 down to -height) with a
-    ring-shaped bulge (a crease to slide on) at y = -centre: (V, T)."""
-    a = np.linspace(0, 2 * np.pi, around, endpoint=False)
-    ys = np.linspace(0.0, -height, rings)
-    r = 1 + 0.3 * np.exp(-((ys + centre) / 0.3) ** 2)
-    V = np.array([[ri * np.sin(t), y, ri * np.cos(t)] for y, ri in zip(ys, r) for t in a])
-    tris = []
-    for i in range(rings - 1):
-        for j in range(around):
-            p, q = i * around + j, i * around + (j + 1) % around
-            tris += [[p, q + around, q], [p, p + around, q + around]]
-    return V, np.array(tris)
+def bumpy_tube(centre: float):
+    """A tube with a ring-shaped bulge (a crease to slide on) at y = -centre."""
+    return tube(rings=41, around=32, bottom=-4.0,
+                profile=lambda y: 1 + 0.3 * np.exp(-((y + centre) / 0.3) ** 2))
 
 
 def test_triangle_neighbours_are_mutual():

@@ -42,6 +42,7 @@ from __future__ import annotations
 
 import dataclasses
 import warnings
+from functools import cached_property
 from typing import Optional, Sequence, Union
 
 import numpy as np
@@ -72,8 +73,9 @@ _SPEC = {p.name: p for p in PARTS}
 #: (This and :data:`OUTSIDE_RULES` are rules of the 2D interpolation,
 #: ``interpolation="2d"``.)  How overlapping source triangles are chosen between:
 #: "front", the smallest depth (the outermost surface, the paper's rule), or "nearest"
-#: (the default), the surface whose depth is nearest the target vertex's own aligned depth, so hidden surfaces - the scalp
-#: under hair, the inside of the lips, under the chin - map to hidden surfaces.  On ICT
+#: (the default), the surface whose depth is nearest the target vertex's own aligned
+#: depth, so hidden surfaces - the scalp under hair, the inside of the lips, under the
+#: chin - map to hidden surfaces.  On ICT
 #: identities (benchmarks/bench_clone_ict.py) "nearest" halves the mean error of "front"
 #: (0.117 against 0.220 % of the eye distance, same mesh, paper's alignment, motion
 #: copied as is).
@@ -294,15 +296,12 @@ class FacialMotionCloner:
 
         zq = self.aligned_depth if self.overlap == "nearest" else None
         radius = self._support(support)
-        source_3d = self.src.space.normalise(self.src.vertices)
-
-        def on_surface(rows: np.ndarray, triangles: np.ndarray) -> sp.csr_matrix:
-            r = np.where(filtered[rows], radius[rows], 0.0)
-            return surface_weights(self.surface_points[rows], source_3d, triangles, r, samples)
 
         def weights(rows: np.ndarray, triangles: np.ndarray) -> sp.csr_matrix:
             if self.interpolation == "surface":
-                return on_surface(rows, triangles)
+                r = np.where(filtered[rows], radius[rows], 0.0)
+                return surface_weights(self.surface_points[rows], self.src.normalised,
+                                       triangles, r, samples)
             out = antialiased_weights(src_uv, triangles, self.aligned[rows], depth,
                                       support=radius[rows], samples=samples, exact=exact,
                                       query_depth=None if zq is None else zq[rows],
@@ -344,13 +343,13 @@ class FacialMotionCloner:
                   if i not in _NOT_SURFACE or i == "7.1"]
         moving = tgt.normalise(np.array([self.target.points[i] for i in common]))
         fixed = src.normalise(np.array([self.source.points[i] for i in common]))
-        warped = feature_warp(moving, fixed, tgt.normalise(tgt.vertices))
+        warped = feature_warp(moving, fixed, self.tgt.normalised)
         if self.neck:
             warped = self._pin_neck(warped)
         if self.register:
             warped = self._register(warped)
         self.surface_points = warped
-        source_3d = src.normalise(src.vertices)
+        source_3d = self.src.normalised
         tris = self.src.triangles
         tri_mesh = self.src.mesh_index[tris[:, 0]]
         for rows, meshes in self._mesh_groups():
@@ -374,7 +373,7 @@ class FacialMotionCloner:
             if skin.main is None:
                 return warped
             first, n = skin.offsets[skin.main]
-            v = skin.space.normalise(skin.vertices[first:first + n])
+            v = skin.normalised[first:first + n]
             chin, axis = skin.space.normalise(np.array([face.points["2.1"], face.points["7.1"]]))
             loop = neck_cut(v, face.meshes[skin.main].triangles, chin, axis)
             if loop is None:
@@ -388,8 +387,7 @@ class FacialMotionCloner:
                           CloneWarning, stacklevel=3)
             return warped
         residual = loop_correspondence(vt[lt], vs[ls]) - warped[ft + lt]
-        points = self.tgt.point_vertices()
-        points = points[(points >= ft) & (points < ft + nt)] - ft
+        points = self.tgt.main_point_rows()
         keep = ~np.isin(lt, points)
         rows = np.concatenate([points, lt[keep]])
         values = np.vstack([np.zeros((len(points), 3)), residual[keep]])
@@ -406,14 +404,11 @@ class FacialMotionCloner:
             return warped
         ft, nt = self.tgt.offsets[self.tgt.main]
         fs, ns = self.src.offsets[self.src.main]
-        points = self.tgt.point_vertices()
-        held = points[(points >= ft) & (points < ft + nt)] - ft
         out = warped.copy()
         out[ft:ft + nt] = register_surface(
-            self.tgt.space.normalise(self.tgt.vertices[ft:ft + nt]),
-            self.target.meshes[self.tgt.main].triangles, warped[ft:ft + nt], held,
-            self.src.space.normalise(self.src.vertices[fs:fs + ns]),
-            self.source.meshes[self.src.main].triangles)
+            self.tgt.normalised[ft:ft + nt], self.target.meshes[self.tgt.main].triangles,
+            warped[ft:ft + nt], self.tgt.main_point_rows(),
+            self.src.normalised[fs:fs + ns], self.source.meshes[self.src.main].triangles)
         return out
 
     def _support(self, support: float) -> np.ndarray:
@@ -807,10 +802,27 @@ class _Skin:
         self.space = FaceSpace(self.vertices, face.points, face.fapu, positions=positions,
                                mouth_angle=mouth_angle)
         self.face = face
+        self._point_rows: Optional[np.ndarray] = None
+
+    @cached_property
+    def normalised(self) -> np.ndarray:
+        """The skin vertices in this face's normalised space (FAPU0 units)."""
+        return self.space.normalise(self.vertices)
+
+    def main_point_rows(self) -> np.ndarray:
+        """:meth:`point_vertices` of the main skin mesh, as rows of that mesh."""
+        first, n = self.offsets[self.main]
+        rows = self.point_vertices()
+        return rows[(rows >= first) & (rows < first + n)] - first
 
     def point_vertices(self) -> np.ndarray:
         """Rows of the skin vertices that are feature points: a point's vertex tie, else
         the skin vertex nearest to it when that is within 1 % of ES0."""
+        if self._point_rows is None:
+            self._point_rows = self._find_point_vertices()
+        return self._point_rows
+
+    def _find_point_vertices(self) -> np.ndarray:
         rows = set()
         if not len(self.vertices):
             return np.zeros(0, dtype=np.int64)

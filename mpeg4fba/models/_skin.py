@@ -96,6 +96,22 @@ def _ring_columns(n: int) -> tuple:
     return phi, c, s, side
 
 
+def _patch_rings(F: HeadSurface, inner: np.ndarray, mid: np.ndarray, edge: np.ndarray,
+                 n_in: int, n_skin: int, power: float) -> tuple:
+    """(P (rings, columns, 3) on the head surface with x, y exactly on the designed
+    contours, ring parameters ``ts``): ``n_in + 2`` rings from ``inner`` to ``mid``
+    (t 0..1), then ``n_skin`` rings from ``mid`` out to ``edge`` (t 1..2, denser near
+    ``mid`` by ``power``)."""
+    t_in = np.linspace(0, 1, n_in + 2)
+    t_skin = 1 + (np.arange(1, n_skin + 1) / n_skin) ** power
+    rings_xy = [inner + tv * (mid - inner) for tv in t_in]
+    rings_xy += [mid + (ts - 1) * (edge - mid) for ts in t_skin]
+    ts = np.concatenate([t_in, t_skin])
+    P = surface_at_xy(F, np.concatenate(rings_xy)).reshape(len(ts), len(inner), 3)
+    P[..., :2] = np.asarray(rings_xy)
+    return P, ts
+
+
 def _mouth_patch(F: HeadSurface, d: Design, res: float) -> _Patch:
     n = 12 * max(1, int(round(2 * res)))                   # columns per lip; 7.5 deg at res 1
     phi, c, s, side = _ring_columns(n)
@@ -114,22 +130,15 @@ def _mouth_patch(F: HeadSurface, d: Design, res: float) -> _Patch:
     edge = np.column_stack([ax_e * c, d.lip_y + 1.0 + np.where(up, 18.0, 23.0) * s])
     n_verm = max(2, int(round(3 * res)))
     n_skin = max(3, int(round(5 * res)))
-    t_verm = np.linspace(0, 1, n_verm + 2)
-    t_skin = 1 + (np.arange(1, n_skin + 1) / n_skin) ** 1.25
-    rings_xy = [inner + tv * (outer - inner) for tv in t_verm]
-    rings_xy += [outer + (ts - 1) * (edge - outer) for ts in t_skin]
-    ts = np.concatenate([t_verm, t_skin])
-    xy = np.concatenate(rings_xy)
-    P = surface_at_xy(F, xy).reshape(len(ts), 2 * n, 3)
-    P[..., :2] = np.asarray(rings_xy)                      # exactly on the designed contours
+    P, ts = _patch_rings(F, inner, outer, edge, n_verm, n_skin, 1.25)
     # lips: thickness along z, by ring and column
     T = ts[:, None]
     g = (1 - c * c)[None, :] ** 0.4
     meet = 0.55
     upper = np.where(T <= 1, meet + (1 - meet) * np.sin(np.pi / 2 * np.clip(T, 0, 1)) ** 0.8,
-                     1 - smoothstep((T - 1) / (t_skin[-1] - 1) * 1.15))
+                     1 - smoothstep((T - 1) / (ts[-1] - 1) * 1.15))
     lower_in = meet * 3.4 / 4.3 + (1 - meet * 3.4 / 4.3) * np.sin(np.pi * np.clip(T, 0, 1) * 0.62) ** 0.9
-    u = np.clip((T - 1) / (t_skin[-1] - 1), 0, 1)
+    u = np.clip((T - 1) / (ts[-1] - 1), 0, 1)
     lower = np.where(T <= 1, lower_in * (1 - 0.25 * smoothstep((T - 0.6) / 0.4)),
                      0.75 * (1 - smoothstep(u / 0.45)) - 0.45 * np.sin(np.pi * u) * (u > 0.3))
     thick = np.where(up[None, :], 3.4 * upper, 4.3 * lower) * g
@@ -166,13 +175,7 @@ def _eye_patch(F: HeadSurface, d: Design, res: float, sgn: int) -> _Patch:
     edge = np.column_stack([cx + (hw + 11.0) * c, cy + 2.0 + np.where(up, 19.0, 16.0) * s])
     n_lid = max(1, int(round(2 * res)))
     n_skin = max(3, int(round(4 * res)))
-    t_lid = np.linspace(0, 1, n_lid + 2)
-    t_skin = 1 + (np.arange(1, n_skin + 1) / n_skin) ** 1.2
-    rings_xy = [margin + tv * (crease - margin) for tv in t_lid]
-    rings_xy += [crease + (ts - 1) * (edge - crease) for ts in t_skin]
-    ts = np.concatenate([t_lid, t_skin])
-    P = surface_at_xy(F, np.concatenate(rings_xy)).reshape(len(ts), 2 * n, 3)
-    P[..., :2] = np.asarray(rings_xy)
+    P, ts = _patch_rings(F, margin, crease, edge, n_lid, n_skin, 1.2)
     # the margin sits on the lid sphere (clear of the eyeball when the lids close)
     m = P[0]
     dx, dy = m[:, 0] - centre[0], m[:, 1] - centre[1]

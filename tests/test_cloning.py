@@ -287,11 +287,15 @@ def test_options_are_checked(source, target):
         FacialMotionCloner(source, target, interpolation="cubic")
     with pytest.raises(ValueError, match='needs alignment="surface"'):
         FacialMotionCloner(source, target, alignment="paper", interpolation="surface")
+    for bad in (-1.0, float("nan")):
+        with pytest.raises(ValueError, match="membrane must be a finite number"):
+            FacialMotionCloner(source, target, membrane=bad)
 
 
 @pytest.mark.parametrize("options", [dict(positions="regional"), dict(triangulation="delaunay"),
                                      dict(scale_motion=False), dict(interpolation="2d"),
-                                     dict(register=False), dict(alignment="paper")])
+                                     dict(register=False), dict(alignment="paper"),
+                                     dict(membrane=0.0)])
 def test_variants_still_clone_everything(source, target, options):
     out, _ = quiet(clone, source, target, **options)
     assert len(out.fat) == len(source.fat)

@@ -128,3 +128,29 @@ def test_registration_slides_a_surface_along_itself():
     # and the result lies on the source surface
     _, _, d = closest_points(out, src, T)
     assert d.max() < 0.02
+
+
+def test_registration_membrane_keeps_the_slide_between_held_points():
+    # a strip on its own plane, held at x = 0.5 (moved +0.1 along x) and at x = 1.5
+    # (not moved): the thin plate alone extends that slide linearly past the held rows
+    # (more than 0.1 at the left end, backwards at the right), the membrane term holds
+    # the overshoot back, the more the stronger it is; the held rows stay put either way
+    x, y = np.meshgrid(np.linspace(0, 2, 41), np.linspace(0, 0.4, 9))
+    V = np.column_stack([x.ravel(), y.ravel(), np.zeros(x.size)])
+    idx = np.arange(x.size).reshape(9, 41)
+    T = np.vstack([np.column_stack([idx[:-1, :-1].ravel(), idx[:-1, 1:].ravel(), idx[1:, 1:].ravel()]),
+                   np.column_stack([idx[:-1, :-1].ravel(), idx[1:, 1:].ravel(), idx[1:, :-1].ravel()])])
+    held = np.concatenate([idx[:, 10], idx[:, 30]])
+    start = V.copy()
+    start[idx[:, 10], 0] += 0.1
+    left, right = idx[4, 0], idx[4, 40]
+    over = []
+    for membrane in (0.0, 0.5, 2.0):
+        out = register_surface(V, T, start, held, V, T, membrane=membrane)
+        d = out[:, 0] - V[:, 0]
+        assert np.allclose(out[held], start[held]) and np.allclose(out[:, 2], 0, atol=1e-9)
+        assert np.isclose(d[idx[4, 20]], 0.05, atol=1e-3)         # halfway: half the slide
+        over.append((d[left] - 0.1, -d[right]))
+    assert over[0][0] > 0.015 and over[0][1] > 0.015                # the thin plate overshoots
+    assert over[0][0] > over[1][0] > over[2][0] > 0
+    assert over[0][1] > over[1][1] > over[2][1] > 0

@@ -60,8 +60,9 @@ from .parts import (HEAD, PARTS, find_parts, lowest_common_transform, source_tra
                     target_transform)
 from .projection import MOUTH_ANGLE
 from .rigid import axis_angle, fit_rigid, rotation_centre, sphere_centre
-from .surface import (closest_points, feature_warp, loop_correspondence, neck_cut,
-                      register_surface, surface_biharmonic, surface_weights)
+from .surface import (REGISTRATION_MEMBRANE, closest_points, feature_warp,
+                      loop_correspondence, neck_cut, register_surface, surface_biharmonic,
+                      surface_weights)
 
 __all__ = ["clone", "FacialMotionCloner", "CloneWarning", "required_points_missing",
            "OVERLAP_RULES", "OUTSIDE_RULES", "METHODS", "ALIGNMENTS", "NECK_RATIO",
@@ -107,8 +108,8 @@ OUTSIDE_RULES = ("nearby", "global")
 #:    warps all its skin vertices (:func:`~mpeg4fba.cloning.surface.feature_warp`);
 #: 2. with ``neck=True``, the neck cuts are pinned onto each other (:data:`NECK_RATIO`);
 #: 3. with ``register=True``, the target's main skin is fitted onto the source's by a
-#:    non-rigid ICP whose stiffness relaxes from the size of the face to a sixteenth of
-#:    it, feature points held
+#:    non-rigid ICP whose stiffness (thin plate and membrane, ``membrane``) relaxes
+#:    from the size of the face to a sixteenth of it, feature points held
 #:    (:func:`~mpeg4fba.cloning.surface.register_surface`).  The warp is exact only at
 #:    the feature points; between them a surface can end up at the right place but
 #:    slid along itself (a throat displaced down the neck, the underside of the chin
@@ -205,7 +206,9 @@ class FacialMotionCloner:
     every target skin mesh from all the source's, the paper's single face mesh);
     ``alignment`` (:data:`ALIGNMENTS`); ``neck`` (pin the neck cuts onto each other,
     :data:`NECK_RATIO`); ``register`` (fit the target's skin onto the source's, step 3 of
-    :data:`ALIGNMENTS`); ``interpolation`` (:data:`INTERPOLATIONS`; by default "surface"
+    :data:`ALIGNMENTS`; ``membrane`` weighs its membrane term against its thin plate,
+    :data:`~mpeg4fba.cloning.surface.REGISTRATION_MEMBRANE`, 0 for the thin plate
+    alone); ``interpolation`` (:data:`INTERPOLATIONS`; by default "surface"
     with the surface alignment, "2d" with the paper's); ``overlap`` (:data:`OVERLAP_RULES`); ``outside`` (:data:`OUTSIDE_RULES`); ``rigid_tolerance`` (how far a part's mesh motion may be from rigid, as a
     fraction of its size, to become a Transform motion); ``min_motion`` (target vertices
     moving less than this fraction of a table's largest motion are left out of it).
@@ -218,7 +221,8 @@ class FacialMotionCloner:
                  mouth_angle: float = MOUTH_ANGLE, rigid_tolerance: float = 0.05,
                  min_motion: float = 1e-3, outside: str = "nearby", overlap: str = "nearest",
                  by_mesh: bool = True, alignment: str = "surface", neck: bool = True,
-                 register: bool = True, interpolation: Optional[str] = None):
+                 register: bool = True, interpolation: Optional[str] = None,
+                 membrane: float = REGISTRATION_MEMBRANE):
         _check_faces(source, target)
         if outside not in OUTSIDE_RULES:
             raise ValueError(f"outside must be one of {OUTSIDE_RULES}, not {outside!r}")
@@ -253,6 +257,9 @@ class FacialMotionCloner:
         self.interpolation = interpolation
         self.neck = bool(neck)
         self.register = bool(register)
+        self.membrane = float(membrane)
+        if not np.isfinite(self.membrane) or self.membrane < 0:
+            raise ValueError(f"membrane must be a finite number >= 0, not {membrane!r}")
         #: whether the neck cuts were pinned onto each other (:data:`NECK_RATIO`)
         self.neck_pinned = False
         #: with alignment="surface": the target's skin vertices placed on the source's
@@ -408,7 +415,8 @@ class FacialMotionCloner:
         out[ft:ft + nt] = register_surface(
             self.tgt.normalised[ft:ft + nt], self.target.meshes[self.tgt.main].triangles,
             warped[ft:ft + nt], self.tgt.main_point_rows(),
-            self.src.normalised[fs:fs + ns], self.source.meshes[self.src.main].triangles)
+            self.src.normalised[fs:fs + ns], self.source.meshes[self.src.main].triangles,
+            membrane=self.membrane)
         return out
 
     def _support(self, support: float) -> np.ndarray:

@@ -2,6 +2,7 @@
 """Quality of Facial Motion Cloning on real faces: ICT-FaceKit identities.
 
     python benchmarks/bench_clone_ict.py [--quick] [--all] [--seeds A B] [--fraction F]
+                                         [--oracle] [--pairs [--variant V] [--same-mesh]]
 
 Reads ``<shared>/data/ict-facekit`` in place (``$MPEG4FBA_SHARED`` or ``<repo>/../shared``;
 the script says so and exits 0 when it is absent).  Faces (:mod:`benchmarks.ict`):
@@ -28,11 +29,19 @@ teeth motion.
 
 ``--oracle`` replaces the alignment by the true correspondence (every target vertex put
 where its original vertex is on the source: possible here because the faces come from
-one mesh) and the surface refinement is skipped, to show what the rest of the pipeline
-does with a perfect alignment.
+one mesh), to show what the rest of the pipeline does with a perfect alignment: in the
+paper's 2D alignment (the surface refinement skipped), and as the surface points of the
+default cloner (registration result replaced by the truth).
+
+Each table of the default cloner is followed by its **registration error**: how far the
+surface alignment put each target skin vertex from where its original vertex is on the
+source (% of the source's normalised inter-ocular distance), per region: what limits
+the mapping, since closest points and a smoothness prior can only guess where a vertex
+belongs along a surface.
 
 Variants (all but ``--quick``): the default cloner (surface alignment: warp, neck cuts
-pinned, registration, weights on the surface); without the registration; without the
+pinned, registration, weights on the surface); without the registration; its thin plate
+alone (``membrane=0``); without the
 neck pinning; the surface alignment with the paper's 2D interpolation; the warp and
 closest point alone with the 2D interpolation (the default before the registration); the
 paper's 2D
@@ -41,8 +50,8 @@ alignment and interpolation ``alignment="paper"``, also with its overlap rule
 ``outside="global"``; ``positions="regional"``; ``support=0`` (no anti-aliasing).
 
 ``--pairs``: the default cloner (or ``--variant NAME``), scaling off, onto the decimated
-target, for several identity pairs (:data:`PAIRS`), to show how much one pair's figures
-say.
+target (``--same-mesh``: the full one), for several identity pairs (:data:`PAIRS`), to
+show how much one pair's figures say.
 """
 from __future__ import annotations
 
@@ -68,6 +77,7 @@ REGIONS = ("mouth", "eyes", "brows", "rest")
 VARIANTS = {
     "default": {},
     "register=False": {"register": False},
+    "membrane=0": {"membrane": 0.0},
     "neck=False": {"neck": False},
     "interpolation=2d": {"interpolation": "2d"},
     "warp only, 2d": {"register": False, "neck": False, "interpolation": "2d"},
@@ -203,16 +213,62 @@ def _use_true_correspondence() -> None:
 _current: dict = {}
 
 
-def robustness(data, names, fraction: float, variant: str = "default") -> int:
-    """One cloner (:data:`VARIANTS`) over :data:`PAIRS`, decimated targets, scaling off."""
-    print(f"[{variant}] scaling off, onto the decimated target (fraction {fraction}), "
-          f"{len(names)} expressions, % of IOD")
+def _true_surface_points(cloner) -> np.ndarray:
+    """(n, 3) where each target skin vertex's original vertex is on the source's skin, in
+    the source's normalised space (the faces share ICT's numbering)."""
+    ft, nt = cloner.tgt.offsets["Skin"]
+    fs, _ = cloner.src.offsets["Skin"]
+    tid = cloner.target.regions[ict.IDS_PREFIX + "Skin"]
+    sid = cloner.source.regions[ict.IDS_PREFIX + "Skin"]
+    return cloner.src.normalised[fs + np.searchsorted(sid, tid)]
+
+
+def registration_error(cloner, target) -> dict:
+    """Per region (mean, max) distance of the surface points from the truth, % IOD."""
+    ft, nt = cloner.tgt.offsets["Skin"]
+    iod = float(np.linalg.norm(np.subtract(*cloner.src.space.normalise(
+        np.array([cloner.source.points["3.5"], cloner.source.points["3.6"]])))))
+    err = np.linalg.norm(cloner.surface_points[ft:ft + nt] - _true_surface_points(cloner),
+                         axis=1) / iod * 100
+    regions = ict.skin_regions(target)
+    out = {}
+    for r in REGIONS:
+        idx = regions[r]
+        if r == "rest":
+            idx = np.intersect1d(idx, target.regions[ict.SKIN_FRONT])
+        out[r] = (float(err[idx].mean()), float(err[idx].max()))
+    return out
+
+
+def _use_true_surface_points() -> None:
+    """Make the default cloner's registration return the true surface points."""
+    import mpeg4fba.cloning.fmc as fmc
+
+    def register(self, warped):
+        out = warped.copy()
+        ft, nt = self.tgt.offsets["Skin"]
+        out[ft:ft + nt] = _true_surface_points(self)
+        return out
+
+    fmc.FacialMotionCloner._register = register
+
+
+def robustness(data, names, fraction: float, variant: str = "default",
+               same_mesh: bool = False) -> int:
+    """One cloner (:data:`VARIANTS`) over :data:`PAIRS`, decimated targets (or the full
+    mesh with ``same_mesh``), scaling off."""
+    onto = "the full mesh" if same_mesh else f"the decimated target (fraction {fraction})"
+    print(f"[{variant}] scaling off, onto {onto}, {len(names)} expressions, % of IOD")
     print(f"{'pair':8s} {'mean':>6s} {'p95':>6s} {'max':>6s}  worst region   flipped beyond truth"
           f"  errors > 2 %")
     worst = []
     for a, b in PAIRS:
         A = ict.ict_face(data, ict.identity(data, a), name=f"ICT-{a}")
-        D = ict.ict_face_decimated(data, ict.identity(data, b), fraction, name=f"ICT-{b}-decimated")
+        if same_mesh:
+            D = ict.ict_face(data, ict.identity(data, b), name=f"ICT-{b}")
+        else:
+            D = ict.ict_face_decimated(data, ict.identity(data, b), fraction,
+                                       name=f"ICT-{b}-decimated")
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             cloner = FacialMotionCloner(A, D, scale_motion=False, **VARIANTS[variant])
@@ -240,6 +296,8 @@ def main(argv=None) -> int:
                     help="the robustness table over several identity pairs, then exit")
     ap.add_argument("--variant", default="default", choices=sorted(VARIANTS),
                     help="the cloner of --pairs (default: the default cloner)")
+    ap.add_argument("--same-mesh", action="store_true",
+                    help="--pairs onto the full mesh instead of the decimated one")
     ap.add_argument("--oracle", action="store_true",
                     help="align by the true correspondence (default cloner, and support=0)")
     args = ap.parse_args(argv)
@@ -250,7 +308,7 @@ def main(argv=None) -> int:
         return 0
     names = list(data.expressions) if args.all else list(EXPRESSIONS)
     if args.pairs:
-        return robustness(data, names, args.fraction, args.variant)
+        return robustness(data, names, args.fraction, args.variant, args.same_mesh)
     a, b = args.seeds
     A = ict.ict_face(data, ict.identity(data, a), name=f"ICT-{a}")
     B = ict.ict_face(data, ict.identity(data, b), name=f"ICT-{b}")
@@ -261,8 +319,10 @@ def main(argv=None) -> int:
     variants = {"default": {}} if args.quick else VARIANTS
     if args.oracle:
         _use_true_correspondence()
+        _use_true_surface_points()
         variants = {"oracle alignment": {"alignment": "paper"},
-                    "oracle alignment, support=0": {"alignment": "paper", "support": 0.0}}
+                    "oracle alignment, support=0": {"alignment": "paper", "support": 0.0},
+                    "oracle surface points": {}}
     summary = []
     for label, opts in variants.items():
         for scale in (False, True):
@@ -277,6 +337,10 @@ def main(argv=None) -> int:
                                     f"{target.name} ({tname}); set-up {setup:.2f} s; "
                                     f"% of IOD", res)
                 summary.append((label, scale, tname, worst))
+                if label == "default" and not scale:
+                    reg = registration_error(cloner, target)
+                    print("registration error (% IOD, mean / max): " + ", ".join(
+                        f"{r} {m:.2f} / {x:.2f}" for r, (m, x) in reg.items()))
     rec, true, name = rigid_jaw(data, A, B)
     print(f"\nrigid parts: jawOpen lower teeth on {B.name}: recovered rotation {rec:.2f} deg "
           f"(Transform {name}), true {true:.2f} deg, difference {abs(rec - true):.2f} deg")

@@ -100,6 +100,15 @@ def source_motion(cloner, face, deltas: dict) -> np.ndarray:
     return out.reshape(len(out), 3 * k)
 
 
+def region_rows(target) -> dict:
+    """Rows of the target's skin measured per region (:data:`REGIONS`); "rest" is kept to
+    ICT's front of the face."""
+    regions = ict.skin_regions(target)
+    out = {r: regions[r] for r in REGIONS}
+    out["rest"] = np.intersect1d(out["rest"], target.regions[ict.SKIN_FRONT])
+    return out
+
+
 def evaluate(cloner, source, target, names, data) -> dict:
     """Per expression: errors (% IOD) per region and flipped triangle counts."""
     full = data.expression_deltas(names)
@@ -109,19 +118,15 @@ def evaluate(cloner, source, target, names, data) -> dict:
     first, n = cloner.target_skin["Skin"]
     got = mapped[first:first + n].reshape(n, len(names), 3).transpose(1, 0, 2)
     iod = float(np.linalg.norm(target.points["3.5"] - target.points["3.6"]))
-    regions = ict.skin_regions(target)
-    front = np.concatenate([regions[r] for r in REGIONS if r != "rest"]
-                           + [np.intersect1d(regions["rest"], target.regions[ict.SKIN_FRONT])])
+    regions = region_rows(target)
+    front = np.concatenate([regions[r] for r in REGIONS])
     skin = target.meshes["Skin"]
     out = {}
     for i, name in enumerate(names):
         err = np.linalg.norm(got[i] - truth[i], axis=1) / iod * 100
         row = {}
         for r in REGIONS:
-            idx = regions[r]
-            if r == "rest":
-                idx = np.intersect1d(idx, target.regions[ict.SKIN_FRONT])
-            e = err[idx]
+            e = err[regions[r]]
             row[r] = (e.mean(), np.percentile(e, 95), e.max())
         e = err[front]
         row["all"] = (e.mean(), np.percentile(e, 95), e.max())
@@ -230,14 +235,8 @@ def registration_error(cloner, target) -> dict:
         np.array([cloner.source.points["3.5"], cloner.source.points["3.6"]])))))
     err = np.linalg.norm(cloner.surface_points[ft:ft + nt] - _true_surface_points(cloner),
                          axis=1) / iod * 100
-    regions = ict.skin_regions(target)
-    out = {}
-    for r in REGIONS:
-        idx = regions[r]
-        if r == "rest":
-            idx = np.intersect1d(idx, target.regions[ict.SKIN_FRONT])
-        out[r] = (float(err[idx].mean()), float(err[idx].max()))
-    return out
+    return {r: (float(err[idx].mean()), float(err[idx].max()))
+            for r, idx in region_rows(target).items()}
 
 
 def _use_true_surface_points() -> None:

@@ -20,3 +20,14 @@ def tube(rings: int = 8, around: int = 24, radius: float = 1.0, top: float = 0.0
     q = (k // around) * around + (k + 1) % around
     T = np.concatenate([np.stack([p, q + around, q], 1), np.stack([p, p + around, q + around], 1)])
     return V, T
+
+
+def grid(nx: int = 6, ny: Optional[int] = None, spacing: float = 1.0) -> tuple:
+    """A flat rectangle of triangles in the xy plane: (V, T), ``nx`` by ``ny`` (default
+    ``nx``) vertices ``spacing`` apart from the origin, row by row (vertex ``y * nx + x``)."""
+    ny = nx if ny is None else ny
+    x, y = np.meshgrid(np.arange(nx) * float(spacing), np.arange(ny) * float(spacing))
+    V = np.stack([x.ravel(), y.ravel(), np.zeros(nx * ny)], axis=1)
+    k = np.arange(nx * ny).reshape(ny, nx)[:-1, :-1].ravel()
+    T = np.concatenate([np.stack([k, k + 1, k + nx + 1], 1), np.stack([k, k + nx + 1, k + nx], 1)])
+    return V, T

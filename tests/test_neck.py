@@ -17,16 +17,7 @@ from mpeg4fba.fba.fat import FAT
 from mpeg4fba.fba.featurepoints import FeaturePointSet
 from mpeg4fba.models import reference_head
 
-from _meshes import tube
-
-
-def grid(n=6):
-    """An n x n vertex square of triangles in the xy plane: (V, T)."""
-    x, y = np.meshgrid(np.arange(n, dtype=float), np.arange(n, dtype=float))
-    V = np.stack([x.ravel(), y.ravel(), np.zeros(n * n)], axis=1)
-    k = np.arange(n * n).reshape(n, n)[:-1, :-1].ravel()
-    T = np.concatenate([np.stack([k, k + 1, k + n + 1], 1), np.stack([k, k + n + 1, k + n], 1)])
-    return V, T
+from _meshes import grid, tube
 
 
 # -- boundary loops -------------------------------------------------------------------------

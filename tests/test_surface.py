@@ -9,7 +9,7 @@ from mpeg4fba.cloning.surface import (boundary_loops, closest_points, feature_wa
                                       register_surface, surface_weights, triangle_neighbours)
 from mpeg4fba.models import reference_head
 
-from _meshes import tube
+from _meshes import grid, tube
 
 
 def brute(p, V, T):
@@ -135,11 +135,8 @@ def test_registration_membrane_keeps_the_slide_between_held_points():
     # (not moved): the thin plate alone extends that slide linearly past the held rows
     # (more than 0.1 at the left end, backwards at the right), the membrane term holds
     # the overshoot back, the more the stronger it is; the held rows stay put either way
-    x, y = np.meshgrid(np.linspace(0, 2, 41), np.linspace(0, 0.4, 9))
-    V = np.column_stack([x.ravel(), y.ravel(), np.zeros(x.size)])
-    idx = np.arange(x.size).reshape(9, 41)
-    T = np.vstack([np.column_stack([idx[:-1, :-1].ravel(), idx[:-1, 1:].ravel(), idx[1:, 1:].ravel()]),
-                   np.column_stack([idx[:-1, :-1].ravel(), idx[1:, 1:].ravel(), idx[1:, :-1].ravel()])])
+    V, T = grid(41, 9, spacing=0.05)
+    idx = np.arange(len(V)).reshape(9, 41)
     held = np.concatenate([idx[:, 10], idx[:, 30]])
     start = V.copy()
     start[idx[:, 10], 0] += 0.1

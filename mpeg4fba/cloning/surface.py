@@ -236,10 +236,10 @@ def _cotangent_laplacian(V: np.ndarray, T: np.ndarray) -> tuple:
 
 
 def _bilaplacian(V: np.ndarray, T: np.ndarray) -> tuple:
-    """(Q, lumped vertex areas): ``Q = L' A^-1 L``, the discrete integral of the squared
-    (cotangent) Laplacian of a field over the mesh."""
+    """(Q, L, lumped vertex areas): ``Q = L' A^-1 L``, the discrete integral of the
+    squared (cotangent) Laplacian ``L`` of a field over the mesh."""
     L, area = _cotangent_laplacian(V, T)
-    return (L.T @ sp.diags(1.0 / area) @ L).tocsr(), area
+    return (L.T @ sp.diags(1.0 / area) @ L).tocsr(), L, area
 
 
 def _factorise(A: sp.spmatrix):
@@ -272,7 +272,7 @@ def surface_biharmonic(vertices: np.ndarray, triangles: np.ndarray, fixed: np.nd
     free = np.setdiff1d(np.arange(n), fixed)
     if not len(free) or not len(fixed):
         return out
-    Q, _ = _bilaplacian(V, T)
+    Q, _, _ = _bilaplacian(V, T)
     Qf = Q[free]
     Qff = Qf[:, free]
     # a whisper of pull towards 0 keeps pieces without a fixed vertex solvable
@@ -339,8 +339,7 @@ def register_surface(rest: np.ndarray, triangles: np.ndarray, start: np.ndarray,
     on = np.unique(ST)
     tree = cKDTree(SV[on])
     normals = vertex_normals(SV, ST)[on]
-    L, area = _cotangent_laplacian(R, T)
-    bend = (L.T @ sp.diags(1.0 / area) @ L).tocsr()
+    bend, L, area = _bilaplacian(R, T)
     m = area[free]
     for scale in scales:
         # the energy of D = X - rest at this scale, l**4 (thin plate) + l**2 (membrane)

@@ -41,8 +41,8 @@ belongs along a surface.
 
 Variants (all but ``--quick``): the default cloner (surface alignment: warp, neck cuts
 pinned, registration, weights on the surface); without the registration; its thin plate
-alone (``membrane=0``); without the
-neck pinning; the surface alignment with the paper's 2D interpolation; the warp and
+alone (``membrane=0``); without the facing term of the surface weights (``facing=0``);
+without the neck pinning; the surface alignment with the paper's 2D interpolation; the warp and
 closest point alone with the 2D interpolation (the default before the registration); the
 paper's 2D
 alignment and interpolation ``alignment="paper"``, also with its overlap rule
@@ -78,6 +78,7 @@ VARIANTS = {
     "default": {},
     "register=False": {"register": False},
     "membrane=0": {"membrane": 0.0},
+    "facing=0": {"facing": 0.0},
     "neck=False": {"neck": False},
     "interpolation=2d": {"interpolation": "2d"},
     "warp only, 2d": {"register": False, "neck": False, "interpolation": "2d"},

@@ -290,16 +290,42 @@ def test_options_are_checked(source, target):
     for bad in (-1.0, float("nan")):
         with pytest.raises(ValueError, match="membrane must be a finite number"):
             FacialMotionCloner(source, target, membrane=bad)
+        with pytest.raises(ValueError, match="facing must be a finite number"):
+            FacialMotionCloner(source, target, facing=bad)
 
 
 @pytest.mark.parametrize("options", [dict(positions="regional"), dict(triangulation="delaunay"),
                                      dict(scale_motion=False), dict(interpolation="2d"),
                                      dict(register=False), dict(alignment="paper"),
-                                     dict(membrane=0.0)])
+                                     dict(membrane=0.0), dict(facing=0.0)])
 def test_variants_still_clone_everything(source, target, options):
     out, _ = quiet(clone, source, target, **options)
     assert len(out.fat) == len(source.fat)
     assert validate(out).ok
+
+
+def test_facing_normals_follow_the_sources_winding_and_skip_coarse_meshes(source, target,
+                                                                         monkeypatch):
+    import mpeg4fba.cloning.fmc as fmc
+    c, _ = quiet(FacialMotionCloner, source, target)
+    n = c._facing_normals()
+    length = np.linalg.norm(n, axis=1)
+    assert np.allclose(length[length > 0], 1) and (length > 0).mean() > 0.8
+    # facing the way the source's surface faces where each vertex lands
+    w = c.weights
+    src_n = fmc.vertex_normals(c.src.normalised, c.src.triangles)
+    towards = np.einsum("ij,ij->i", n, np.asarray(w @ src_n))
+    assert np.median(towards[length > 0]) > 0.9
+    # a target wound the other way round gets the same normals
+    flipped = FaceModel([FaceMesh(m.name, m.vertices, m.triangles[:, ::-1], m.parent)
+                         for m in target.meshes.values()], target.transforms.values(),
+                        points=target.points, fapu=target.fapu, fat=target.fat)
+    c2, _ = quiet(FacialMotionCloner, source, flipped)
+    assert np.allclose(c2._facing_normals(), n)
+    # a target much coarser than the source: no normal counts
+    monkeypatch.setattr(fmc, "FACING_RESOLUTION", 0.1)
+    assert not c._facing_normals().any()
+    assert FacialMotionCloner(source, target, facing=0.0)._facing_normals() is None
 
 
 def test_top_level_name():

@@ -111,6 +111,39 @@ def test_surface_weights_stop_at_the_rim():
     assert np.allclose(W.sum(), 1) and (W.data >= 0).all()
 
 
+def _closed_lips(gap: float = 0.002):
+    """Two 5 x 5 unit grids a ``gap`` apart: the lower lip at z=0 facing +z, the upper
+    at z=gap facing -z (its triangles wound the other way)."""
+    x, y = np.meshgrid(np.linspace(0, 1, 5), np.linspace(0, 1, 5))
+    grid = np.stack([x.ravel(), y.ravel(), np.zeros(25)], 1)
+    k = np.arange(25).reshape(5, 5)[:-1, :-1].ravel()
+    T = np.concatenate([np.stack([k, k + 1, k + 6], 1), np.stack([k, k + 6, k + 5], 1)])
+    V = np.vstack([grid, grid + [0, 0, gap]])
+    return V, np.vstack([T, T[:, ::-1] + 25])
+
+
+def test_facing_keeps_a_point_on_the_sheet_it_faces_like():
+    V, T = _closed_lips()
+    # lower-lip points placed a little too high, nearer the upper lip
+    P = np.column_stack([np.linspace(0.1, 0.9, 7), np.full(7, 0.4), np.full(7, 0.0015)])
+    up = np.tile([0.0, 0.0, 1.0], (7, 1))
+    lip = np.r_[np.zeros(25), np.ones(25)]          # 0 on the lower lip, 1 on the upper
+    plain = surface_weights(P, V, T, radius=0.05)
+    faced = surface_weights(P, V, T, radius=0.05, normals=up, facing=0.01)
+    assert np.allclose(plain @ lip, 1) and np.allclose(faced @ lip, 0)
+    assert np.allclose(np.asarray(faced.sum(axis=1)).ravel(), 1)
+    # a zero normal (one that doesn't count) and facing=0 are the plain closest point
+    for normals, facing in ((np.zeros((7, 3)), 0.01), (up, 0.0)):
+        t, _, _ = closest_points(P, V, T, normals=normals, facing=facing)
+        assert (t >= len(T) // 2).all()
+    # the distance returned is the true one, not the cost
+    assert np.allclose(closest_points(P, V, T, normals=up, facing=0.01)[2], 0.0015)
+    # a sheet facing the right way but further off than ``facing`` is not worth the trip
+    V, T = _closed_lips(gap=0.02)
+    t, _, d = closest_points(P + [0, 0, 0.0175], V, T, normals=up, facing=0.01)
+    assert (t >= len(T) // 2).all() and np.allclose(d, 0.001)
+
+
 def test_registration_slides_a_surface_along_itself():
     # source: a bulge at depth 2; target: the same tube with its bulge at 2.3, held at
     # both rims.  Closest points leave the target's bulge where it is (they only move a

@@ -75,13 +75,35 @@ def point_triangle(p: np.ndarray, tri: np.ndarray) -> tuple:
 
 
 def closest_points(points: np.ndarray, vertices: np.ndarray, triangles: np.ndarray,
-                   k: int = 6) -> tuple:
+                   k: int = 6, *, normals: Optional[np.ndarray] = None,
+                   facing: float = 0.0) -> tuple:
     """(triangle index, barycentrics, distance) of the closest point of the mesh to each
     of ``points``, searched among the triangles around the ``k`` nearest vertices (exact
-    unless the mesh is much coarser near a point than elsewhere)."""
+    unless the mesh is much coarser near a point than elsewhere).
+
+    With ``normals`` (n, 3, unit or zero) and ``facing`` > 0 a triangle is chosen by its
+    distance plus ``facing * (1 - cos) / 2``, cos between its normal and the point's: a
+    triangle facing the other way counts ``facing`` further away, so of two sheets that
+    touch (closed lips, eyelids) the point takes the one it faces like.  A zero normal
+    adds the same to every triangle (plain closest point).  The distance returned is the
+    true one.
+
+    >>> V = np.array([[0.0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 0.01], [0, 1, 0.01], [1, 0, 0.01]])
+    >>> T = np.array([[0, 1, 2], [3, 4, 5]])   # a sheet facing +z under one facing -z
+    >>> P, up = np.array([[0.2, 0.2, 0.006]]), np.array([[0.0, 0, 1]])
+    >>> [int(closest_points(P, V, T, normals=up, facing=f)[0][0]) for f in (0.0, 0.01)]
+    [1, 0]
+    """
     P = np.asarray(points, dtype=np.float64).reshape(-1, 3)
     V = np.asarray(vertices, dtype=np.float64)
     T = np.asarray(triangles, dtype=np.int64).reshape(-1, 3)
+    cost_of_facing = normals is not None and facing > 0
+    if cost_of_facing:
+        N = np.asarray(normals, dtype=np.float64).reshape(-1, 3)
+        tn = np.cross(V[T[:, 1]] - V[T[:, 0]], V[T[:, 2]] - V[T[:, 0]])
+        tn /= np.maximum(np.linalg.norm(tn, axis=1, keepdims=True), 1e-300)
+        # the sheet a point faces like may lie a little beyond the nearest vertices
+        k = max(int(k), 12)
     used = np.unique(T)
     k = max(1, min(int(k), len(used)))
     _, near = cKDTree(V[used]).query(P, k=k)
@@ -92,6 +114,7 @@ def closest_points(points: np.ndarray, vertices: np.ndarray, triangles: np.ndarr
     start = np.concatenate([[0], np.cumsum(counts)])
     tri_of = order // 3
     best_d = np.full(len(P), np.inf)
+    best_c = np.full(len(P), np.inf)
     best_t = np.zeros(len(P), dtype=np.int64)
     best_b = np.zeros((len(P), 3))
     for j in range(k):
@@ -102,15 +125,16 @@ def closest_points(points: np.ndarray, vertices: np.ndarray, triangles: np.ndarr
         pos = np.arange(rows.size) - np.repeat(np.cumsum(cnt) - cnt, cnt) + start[v][rows]
         t = tri_of[pos]
         b, d = point_triangle(P[rows], V[T[t]])
+        cost = d + facing * (1 - (N[rows] * tn[t]).sum(1)) / 2 if cost_of_facing else d
         # the best pair of each point
-        o = np.lexsort((d, rows))
-        rows, t, b, d = rows[o], t[o], b[o], d[o]
+        o = np.lexsort((cost, rows))
+        rows, t, b, d, cost = rows[o], t[o], b[o], d[o], cost[o]
         first = np.ones(rows.size, dtype=bool)
         first[1:] = rows[1:] != rows[:-1]
-        rows, t, b, d = rows[first], t[first], b[first], d[first]
-        better = d < best_d[rows]
+        rows, t, b, d, cost = rows[first], t[first], b[first], d[first], cost[first]
+        better = cost < best_c[rows]
         r = rows[better]
-        best_d[r], best_t[r], best_b[r] = d[better], t[better], b[better]
+        best_c[r], best_d[r], best_t[r], best_b[r] = cost[better], d[better], t[better], b[better]
     return best_t, best_b, best_d
 
 
@@ -407,13 +431,15 @@ def _plane_barycentric(P: np.ndarray, tri: np.ndarray) -> np.ndarray:
 
 def surface_weights(points: np.ndarray, vertices: np.ndarray, triangles: np.ndarray,
                     radius: Union[float, np.ndarray] = 0.0, samples: int = 8,
-                    steps: int = 8) -> sp.csr_matrix:
+                    steps: int = 8, *, normals: Optional[np.ndarray] = None,
+                    facing: float = 0.0) -> sp.csr_matrix:
     """(len(points), len(vertices)) interpolation weights over a mesh at the closest
     point of each of ``points``, anti-aliased: the average with ``samples`` points on
     the circle of ``radius`` (one per point, or one for all) round it in the plane of
     its triangle, each carried over the mesh by walking across edges (up to ``steps``
     triangles; past a boundary it stops at the rim).  The paper's filter, on the surface
-    rather than in the 2D projection.  Rows sum to 1.
+    rather than in the 2D projection.  Rows sum to 1.  ``normals`` and ``facing``: the
+    closest point is chosen as :func:`closest_points` says.
 
     >>> V = np.array([[0.0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0]]); T = np.array([[0, 1, 2], [2, 1, 3]])
     >>> surface_weights(np.array([[0.2, 0.2, 0.3]]), V, T).toarray().round(6).tolist()
@@ -426,7 +452,7 @@ def surface_weights(points: np.ndarray, vertices: np.ndarray, triangles: np.ndar
     V = np.asarray(vertices, dtype=np.float64)
     T = np.asarray(triangles, dtype=np.int64).reshape(-1, 3)
     n = len(P)
-    t, b, _ = closest_points(P, V, T)
+    t, b, _ = closest_points(P, V, T, normals=normals, facing=facing)
     rows, cols, vals = [np.repeat(np.arange(n), 3)], [T[t].ravel()], [b.ravel()]
     r = np.broadcast_to(np.asarray(radius, dtype=np.float64).reshape(-1), (n,))
     filtered = np.flatnonzero(r > 0) if samples > 0 else np.zeros(0, dtype=np.int64)

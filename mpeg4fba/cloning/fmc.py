@@ -62,7 +62,7 @@ from .projection import MOUTH_ANGLE
 from .rigid import axis_angle, fit_rigid, rotation_centre, sphere_centre
 from .surface import (REGISTRATION_MEMBRANE, closest_points, feature_warp,
                       loop_correspondence, neck_cut, register_surface, surface_biharmonic,
-                      surface_weights, vertex_normals)
+                      surface_weights, triangle_normals, vertex_normals)
 
 __all__ = ["clone", "FacialMotionCloner", "CloneWarning", "required_points_missing",
            "OVERLAP_RULES", "OUTSIDE_RULES", "METHODS", "ALIGNMENTS", "NECK_RATIO",
@@ -399,8 +399,7 @@ class FacialMotionCloner:
             if not len(tris):
                 continue
             normal = vertex_normals(v, tris)
-            face = np.cross(v[tris[:, 1]] - v[tris[:, 0]], v[tris[:, 2]] - v[tris[:, 0]])
-            face /= np.maximum(np.linalg.norm(face, axis=1, keepdims=True), 1e-300)
+            face = triangle_normals(v, tris)
             # the least agreement of a vertex's normal with its own triangles'
             agree = np.ones(n)
             for k in range(3):

@@ -18,7 +18,8 @@ import scipy.sparse.linalg as spla
 from scipy.spatial import cKDTree
 
 __all__ = ["closest_points", "point_triangle", "feature_warp", "boundary_loops", "neck_cut",
-           "loop_correspondence", "surface_biharmonic", "vertex_normals", "register_surface",
+           "loop_correspondence", "surface_biharmonic", "vertex_normals", "triangle_normals",
+           "register_surface",
            "REGISTRATION_SCALES", "REGISTRATION_MEMBRANE", "surface_weights",
            "triangle_neighbours"]
 
@@ -100,8 +101,7 @@ def closest_points(points: np.ndarray, vertices: np.ndarray, triangles: np.ndarr
     cost_of_facing = normals is not None and facing > 0
     if cost_of_facing:
         N = np.asarray(normals, dtype=np.float64).reshape(-1, 3)
-        tn = np.cross(V[T[:, 1]] - V[T[:, 0]], V[T[:, 2]] - V[T[:, 0]])
-        tn /= np.maximum(np.linalg.norm(tn, axis=1, keepdims=True), 1e-300)
+        tn = triangle_normals(V, T)
         # the sheet a point faces like may lie a little beyond the nearest vertices
         k = max(int(k), 12)
     used = np.unique(T)
@@ -304,6 +304,14 @@ def surface_biharmonic(vertices: np.ndarray, triangles: np.ndarray, fixed: np.nd
     solve = _factorise(Qff + eps * sp.eye(len(free)))
     out[free] = solve(np.ascontiguousarray(-(Qf[:, fixed] @ values)))
     return out
+
+
+def triangle_normals(vertices: np.ndarray, triangles: np.ndarray) -> np.ndarray:
+    """(m, 3) unit normals of the triangles (by their winding; 0 for a degenerate one)."""
+    V = np.asarray(vertices, dtype=np.float64)
+    T = np.asarray(triangles, dtype=np.int64).reshape(-1, 3)
+    n = np.cross(V[T[:, 1]] - V[T[:, 0]], V[T[:, 2]] - V[T[:, 0]])
+    return n / np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-300)
 
 
 def vertex_normals(vertices: np.ndarray, triangles: np.ndarray) -> np.ndarray:

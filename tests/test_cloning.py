@@ -9,8 +9,8 @@ import pytest
 import scipy.sparse as sp
 
 import mpeg4fba as fba
-from mpeg4fba.cloning import (LOWER, REQUIRED_POINTS, UPPER, CloneWarning, FacialMotionCloner,
-                              clone, find_parts)
+from mpeg4fba.cloning import (LOWER, OUTSIDE, REQUIRED_POINTS, UPPER, CloneWarning, FacialMotionCloner,
+                              clone, find_parts, lip_regions)
 from mpeg4fba.cloning.rigid import sphere_centre
 from mpeg4fba.fba.face import FaceMesh, FaceModel
 from mpeg4fba.fba.fat import FAT, FaceDefMesh, FaceDefTable, rotation_matrices
@@ -140,6 +140,32 @@ def test_lip_regions_follow_the_lips(source):
     assert (regions[source.regions["lips_upper"]] != LOWER).all()
     assert (regions[source.regions["lips_lower"]] != UPPER).all()
     assert np.mean(regions[source.regions["lips_upper"]] == UPPER) > 0.8
+
+
+def test_a_sliver_hanging_off_the_lip_corner_keeps_its_side():
+    """Both lips meet at the corners, so a path through a corner does not say which lip a
+    vertex near the mid line belongs to: a sliver joined to the rest only at the corner
+    keeps the polygon's answer, whichever lip comes nearer the corner."""
+    pts = {"2.4": (0.3, 0.0), "2.6": (0.15, 0.01), "2.2": (0, 0.01), "2.7": (-0.15, 0.01),
+           "2.5": (-0.3, 0.0), "2.8": (0.15, -0.01), "2.3": (0, -0.01), "2.9": (-0.15, -0.01),
+           "9.1": (0.2, 0.5), "9.2": (-0.2, 0.5), "2.11": (0.2, -0.5), "2.12": (-0.2, -0.5)}
+    pts = {k: np.array(v) for k, v in pts.items()}
+    #            corner      upper lip    lower lip     sliver (just above the mid line)
+    uv = np.array([[0.3, 0.0], [0.25, 0.06], [0.27, -0.05], [0.29, 0.005], [0.28, 0.004]])
+    tris = np.array([[0, 1, 2], [0, 3, 4]])
+    xyz = np.c_[uv, np.zeros(len(uv))]
+    plain = lip_regions(uv, pts)
+    assert plain.tolist() == [OUTSIDE, UPPER, LOWER, UPPER, UPPER]
+    got = lip_regions(uv, pts, triangles=tris, vertices=xyz)
+    assert got[1:].tolist() == [UPPER, LOWER, UPPER, UPPER]
+    # through the corner the lower lip is nearer: without the rule the sliver goes there
+    through = lip_regions(uv, pts, triangles=tris, vertices=xyz, corner=0.0)
+    assert through[3:].tolist() == [LOWER, LOWER]
+    # joined to the upper lip past the corner too, it is settled by the mesh as before
+    joined = lip_regions(uv, pts, triangles=np.vstack([tris, [[3, 1, 4]]]), vertices=xyz)
+    assert joined[3:].tolist() == [UPPER, UPPER]
+    with_lower = lip_regions(uv, pts, triangles=np.vstack([tris, [[3, 2, 4]]]), vertices=xyz)
+    assert with_lower[3:].tolist() == [LOWER, LOWER]
 
 
 def _other_lip_motion(source, target, **options) -> float:

@@ -105,6 +105,17 @@ def shared_dir() -> Path:
 
 
 @pytest.fixture(scope="session")
+def ict_data(shared_dir):
+    """The ICT-FaceKit arrays (``benchmarks.ict.load_ict``), or skip when the file is
+    absent from ../shared."""
+    from benchmarks import ict
+    try:
+        return ict.load_ict(shared_dir)
+    except FileNotFoundError as e:
+        pytest.skip(str(e))
+
+
+@pytest.fixture(scope="session")
 def shared_dir_or_none() -> Optional[Path]:
     """Path of ../shared, or None (for tests with a generated fallback)."""
     return locate_shared()[0]

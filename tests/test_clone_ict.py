@@ -18,11 +18,8 @@ from mpeg4fba.cloning import LOWER, UPPER, FacialMotionCloner
 
 
 @pytest.fixture(scope="module")
-def data(shared_dir):
-    try:
-        return ict.load_ict(shared_dir)
-    except FileNotFoundError as e:
-        pytest.skip(str(e))
+def data(ict_data):
+    return ict_data
 
 
 def _clone(data, a: int, b: int) -> tuple:

@@ -28,11 +28,8 @@ EXPECTED_MESH = {"3.5": "LeftEyeball", "3.6": "RightEyeball", "9.8": "UpperTeeth
 
 
 @pytest.fixture(scope="session")
-def data(shared_dir):
-    try:
-        return ict.load_ict(shared_dir)
-    except FileNotFoundError as e:
-        pytest.skip(str(e))
+def data(ict_data):
+    return ict_data
 
 
 @pytest.fixture(scope="session")

@@ -79,6 +79,7 @@ VARIANTS = {
     "register=False": {"register": False},
     "membrane=0": {"membrane": 0.0},
     "facing=0": {"facing": 0.0},
+    "refine=False": {"refine": False},
     "neck=False": {"neck": False},
     "interpolation=2d": {"interpolation": "2d"},
     "warp only, 2d": {"register": False, "neck": False, "interpolation": "2d"},

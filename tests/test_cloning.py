@@ -323,7 +323,8 @@ def test_options_are_checked(source, target):
 @pytest.mark.parametrize("options", [dict(positions="regional"), dict(triangulation="delaunay"),
                                      dict(scale_motion=False), dict(interpolation="2d"),
                                      dict(register=False), dict(alignment="paper"),
-                                     dict(membrane=0.0), dict(facing=0.0)])
+                                     dict(membrane=0.0), dict(facing=0.0),
+                                     dict(refine=False)])
 def test_variants_still_clone_everything(source, target, options):
     out, _ = quiet(clone, source, target, **options)
     assert len(out.fat) == len(source.fat)
@@ -352,6 +353,44 @@ def test_facing_normals_follow_the_sources_winding_and_skip_coarse_meshes(source
     monkeypatch.setattr(fmc, "FACING_RESOLUTION", 0.1)
     assert not c._facing_normals().any()
     assert FacialMotionCloner(source, target, facing=0.0)._facing_normals() is None
+
+
+def test_the_finer_fit_moves_the_surface_points_and_keeps_the_regions(source, target):
+    """refine=True goes on fitting for the surface points (REGISTRATION_FINE_SCALES);
+    the lip and eyelid regions stay with the stiffer fit, so they are those of
+    refine=False, and the points still lie on the source's surface."""
+    fine, _ = quiet(FacialMotionCloner, source, target)
+    stiff, _ = quiet(FacialMotionCloner, source, target, refine=False)
+    assert np.array_equal(fine.target_regions, stiff.target_regions)
+    assert np.array_equal(fine.aligned, stiff.aligned)
+    moved = np.linalg.norm(fine.surface_points - stiff.surface_points, axis=1)
+    assert moved.max() > 1e-3          # it does move them (normalised units, ES0 = 1)
+    assert np.median(moved) < 0.01     # ... by a little
+    first, n = fine.tgt.offsets[fine.tgt.main]
+    fs, ns = fine.src.offsets[fine.src.main]
+    from mpeg4fba.cloning.surface import closest_points
+    tris = source.meshes[fine.src.main].triangles
+    _, _, d = closest_points(fine.surface_points[first:first + n],
+                             fine.src.normalised[fs:fs + ns], tris)
+    _, _, d0 = closest_points(stiff.surface_points[first:first + n],
+                              fine.src.normalised[fs:fs + ns], tris)
+    assert np.median(d) <= np.median(d0) + 1e-9
+    # the feature points stay held
+    rows = fine.tgt.main_point_rows()
+    assert np.allclose(fine.surface_points[first + rows], stiff.surface_points[first + rows])
+    # without the registration there is nothing to refine
+    a, _ = quiet(FacialMotionCloner, source, target, register=False)
+    b, _ = quiet(FacialMotionCloner, source, target, register=False, refine=False)
+    assert np.array_equal(a.surface_points, b.surface_points)
+
+
+def test_a_triangle_with_two_corners_on_the_other_side_is_hidden():
+    from mpeg4fba.cloning.fmc import visible_triangles
+    regions = np.array([[UPPER] * 3, [UPPER, UPPER, OUTSIDE], [UPPER, UPPER, LOWER],
+                        [UPPER, LOWER, OUTSIDE], [LOWER] * 3, [OUTSIDE] * 3])
+    # what a lower-lip vertex may take motion from
+    assert visible_triangles(regions, UPPER).tolist() == [False, False, False, True, True, True]
+    assert visible_triangles(regions, LOWER).tolist() == [True, True, True, True, False, True]
 
 
 def test_top_level_name():

@@ -60,13 +60,14 @@ from .parts import (HEAD, PARTS, find_parts, lowest_common_transform, source_tra
                     target_transform)
 from .projection import MOUTH_ANGLE
 from .rigid import axis_angle, fit_rigid, rotation_centre, sphere_centre
-from .surface import (REGISTRATION_MEMBRANE, closest_points, feature_warp,
+from .surface import (REGISTRATION_FINE_SCALES, REGISTRATION_MEMBRANE, closest_points,
+                      feature_warp,
                       loop_correspondence, neck_cut, register_surface, surface_biharmonic,
                       surface_weights, triangle_normals, vertex_normals)
 
 __all__ = ["clone", "FacialMotionCloner", "CloneWarning", "required_points_missing",
            "OVERLAP_RULES", "OUTSIDE_RULES", "METHODS", "ALIGNMENTS", "NECK_RATIO",
-           "INTERPOLATIONS", "FACING", "FACING_RESOLUTION"]
+           "INTERPOLATIONS", "FACING", "FACING_RESOLUTION", "visible_triangles"]
 
 _SPEC = {p.name: p for p in PARTS}
 
@@ -102,7 +103,7 @@ OUTSIDE_RULES = ("nearby", "global")
 #: How the target is aligned on the source.  "paper": the paper's alignment alone (feature
 #: points onto the source's, the rest pulled by interpolation over the feature point
 #: triangulation, in 2D).  "surface" (the default) then places the target on the
-#: source's surface in 3D, in the normalised space, in four steps:
+#: source's surface in 3D, in the normalised space, in five steps:
 #:
 #: 1. the thin-plate spline that takes the target's feature points onto the source's
 #:    warps all its skin vertices (:func:`~mpeg4fba.cloning.surface.feature_warp`);
@@ -110,13 +111,18 @@ OUTSIDE_RULES = ("nearby", "global")
 #: 3. with ``register=True``, the target's main skin is fitted onto the source's by a
 #:    non-rigid ICP whose stiffness (thin plate and membrane, ``membrane``) relaxes
 #:    from the size of the face to a sixteenth of it, feature points held
-#:    (:func:`~mpeg4fba.cloning.surface.register_surface`).  The warp is exact only at
-#:    the feature points; between them a surface can end up at the right place but
+#:    (:func:`~mpeg4fba.cloning.surface.register_surface`).  The warp is exact only
+#:    at the feature points; between them a surface can end up at the right place but
 #:    slid along itself (a throat displaced down the neck, the underside of the chin
 #:    shifted back), which a closest point can't see and the fit corrects, since a
 #:    slid surface no longer matches the source's where it bends;
 #: 4. each vertex goes to its closest point on the source's surface (of its mesh
-#:    group), whose 2D position is its aligned position for the lip and eyelid regions.
+#:    group), whose 2D position is its aligned position for the lip and eyelid regions;
+#: 5. with ``register=True`` and ``refine=True``, the fit goes on to a sixty-fourth of
+#:    the face (:data:`~mpeg4fba.cloning.surface.REGISTRATION_FINE_SCALES`) and its
+#:    result is the surface points the surface weights are taken at; the regions stay
+#:    with step 4, since a vertex following the source's facets can cross the mouth's
+#:    mid line.
 #:
 #: 2D interpolation between feature points can't see how a surface seen edge-on by the
 #: projection (under the chin, the neck) differs between two faces; the 3D steps can.
@@ -218,6 +224,21 @@ def _check_faces(source: FaceModel, target: FaceModel) -> None:
             raise ValueError(f"the {which} face ({face.name}) has no usable FAPU")
 
 
+def visible_triangles(corner_regions: np.ndarray, hide: int) -> np.ndarray:
+    """(m,) bool: which source triangles, by the regions of their corners (m, 3), a
+    target vertex of the side opposite ``hide`` may take motion from: those with at most
+    one corner on the ``hide`` side.  One is allowed because where the mesh joins the
+    two sides (the corners of the mouth and eyes) both move the skin; two make the
+    triangle the other side's: a lower-lip vertex at the mouth corner of ICT 3 -> 4 (full
+    mesh) took the upper lip's motion from such a triangle, 11 % of the eye distance off
+    under jawOpen.
+
+    >>> visible_triangles(np.array([[1, 1, 1], [1, 1, 0], [1, 2, 0], [0, 0, 0]]), 1).tolist()
+    [False, False, True, True]
+    """
+    return (np.asarray(corner_regions) == hide).sum(axis=1) < 2
+
+
 def _linear(face: FaceModel, transform: Optional[str]) -> np.ndarray:
     return face.world_matrix(transform)[0][:3, :3]
 
@@ -237,7 +258,8 @@ class FacialMotionCloner:
     :data:`NECK_RATIO`); ``register`` (fit the target's skin onto the source's, step 3 of
     :data:`ALIGNMENTS`; ``membrane`` weighs its membrane term against its thin plate,
     :data:`~mpeg4fba.cloning.surface.REGISTRATION_MEMBRANE`, 0 for the thin plate
-    alone); ``interpolation`` (:data:`INTERPOLATIONS`; by default "surface"
+    alone; ``refine``: go on to :data:`~mpeg4fba.cloning.surface.REGISTRATION_FINE_SCALES`
+    for the surface points, the regions staying with the stiffer fit); ``interpolation`` (:data:`INTERPOLATIONS`; by default "surface"
     with the surface alignment, "2d" with the paper's); ``facing`` (with the surface
     interpolation, how much a source sheet facing against the target vertex counts
     against it, :data:`FACING`, 0 to turn it off); ``overlap`` (:data:`OVERLAP_RULES`); ``outside`` (:data:`OUTSIDE_RULES`); ``rigid_tolerance`` (how far a part's mesh motion may be from rigid, as a
@@ -253,7 +275,8 @@ class FacialMotionCloner:
                  min_motion: float = 1e-3, outside: str = "nearby", overlap: str = "nearest",
                  by_mesh: bool = True, alignment: str = "surface", neck: bool = True,
                  register: bool = True, interpolation: Optional[str] = None,
-                 membrane: float = REGISTRATION_MEMBRANE, facing: float = FACING):
+                 membrane: float = REGISTRATION_MEMBRANE, facing: float = FACING,
+                 refine: bool = True):
         _check_faces(source, target)
         if outside not in OUTSIDE_RULES:
             raise ValueError(f"outside must be one of {OUTSIDE_RULES}, not {outside!r}")
@@ -288,6 +311,7 @@ class FacialMotionCloner:
         self.interpolation = interpolation
         self.neck = bool(neck)
         self.register = bool(register)
+        self.refine = bool(refine)
         self.membrane = float(membrane)
         if not np.isfinite(self.membrane) or self.membrane < 0:
             raise ValueError(f"membrane must be a finite number >= 0, not {membrane!r}")
@@ -371,9 +395,7 @@ class FacialMotionCloner:
             for which in np.unique(treg[group_rows]):
                 rows = group_rows[treg[group_rows] == which]
                 hide = opposite(int(which))
-                # a triangle with a vertex on each side (where the mesh joins the lips,
-                # at the corners) stays: there both sides move the skin
-                keep = in_group if hide == OUTSIDE else in_group & ~(sreg[tris] == hide).all(axis=1)
+                keep = in_group if hide == OUTSIDE else in_group & visible_triangles(sreg[tris], hide)
                 blocks.append(weights(rows, tris[keep]))
                 order.append(rows)
         w = sp.vstack(blocks).tocsr()
@@ -425,7 +447,10 @@ class FacialMotionCloner:
             warped = self._pin_neck(warped)
         if self.register:
             warped = self._register(warped)
-        self.surface_points = warped
+        # the 2D positions (for the regions) from the stiffer fit, the surface points
+        # from the finer one (see REGISTRATION_FINE_SCALES)
+        self.surface_points = self._register(warped, REGISTRATION_FINE_SCALES) \
+            if self.register and self.refine else warped
         source_3d = self.src.normalised
         tris = self.src.triangles
         tri_mesh = self.src.mesh_index[tris[:, 0]]
@@ -474,9 +499,10 @@ class FacialMotionCloner:
         self.neck_pinned = True
         return out
 
-    def _register(self, warped: np.ndarray) -> np.ndarray:
+    def _register(self, warped: np.ndarray, scales: Optional[tuple] = None) -> np.ndarray:
         """``warped`` with the target's main skin fitted onto the source's main skin
-        (:func:`~mpeg4fba.cloning.surface.register_surface`), its feature points held."""
+        (:func:`~mpeg4fba.cloning.surface.register_surface`, over ``scales``, by default
+        its own), its feature points held."""
         if self.src.main is None or self.tgt.main is None:
             return warped
         ft, nt = self.tgt.offsets[self.tgt.main]
@@ -486,7 +512,7 @@ class FacialMotionCloner:
             self.tgt.normalised[ft:ft + nt], self.target.meshes[self.tgt.main].triangles,
             warped[ft:ft + nt], self.tgt.main_point_rows(),
             self.src.normalised[fs:fs + ns], self.source.meshes[self.src.main].triangles,
-            membrane=self.membrane)
+            membrane=self.membrane, **({} if scales is None else {"scales": scales}))
         return out
 
     def _support(self, support: float) -> np.ndarray:

@@ -20,15 +20,32 @@ from scipy.spatial import cKDTree
 __all__ = ["closest_points", "point_triangle", "feature_warp", "boundary_loops", "neck_cut",
            "loop_correspondence", "surface_biharmonic", "vertex_normals", "triangle_normals",
            "register_surface",
-           "REGISTRATION_SCALES", "REGISTRATION_MEMBRANE", "surface_weights",
+           "REGISTRATION_SCALES", "REGISTRATION_FINE_SCALES", "REGISTRATION_MEMBRANE",
+           "surface_weights",
            "triangle_neighbours"]
 
 #: The stiffness schedule of :func:`register_surface`: the length scales (in the units of
 #: the vertices; the cloner's normalised space, where the eye separation is 1) over which
 #: the fit may bend, coarse to fine.  Measured on ICT identities (benchmarks/bench_clone_ict.py):
-#: starting stiffer changes nothing, stopping at a finer scale lets the fit follow the
-#: source's mesh facets.
+#: starting stiffer changes nothing; a fit going on to finer scales follows the source's
+#: facets, which moves some vertices across the mouth's mid line, so the cloner decides
+#: its lip regions here and takes only its surface points finer
+#: (:data:`REGISTRATION_FINE_SCALES`).
 REGISTRATION_SCALES = (1.0, 0.5, 0.25, 0.125, 0.0625)
+#: Where the cloner's fit goes on after :data:`REGISTRATION_SCALES` (``refine=True``):
+#: the lip and eyelid regions are decided on the fit at 1/16, and the surface points the
+#: motion is taken from come from these finer scales.  Decided at the finer scales, the
+#: regions go wrong at the mouth corners: a vertex following the source's facets crosses
+#: the mid line of the mouth (ICT 9 -> 10 onto the full mesh: a lower-lip vertex on the
+#: upper lip, 15 % of the eye distance off under jawOpen).  Measured on six ICT pairs
+#: (``benchmarks/bench_clone_ict.py --pairs``), against stopping at 1/16: onto the full
+#: mesh the mean error 0.065 -> 0.063 % IOD, errors over 2 % 632 -> 538, flips 21 -> 15,
+#: median of the largest errors 3.06 -> 2.97; onto the decimated targets 0.061 -> 0.060,
+#: 78 -> 76 and 2.83 -> 2.71, for a tenth more set-up (0.45 of 5.3 s on the
+#: 30,000-vertex reference heads, ``benchmarks/bench_clone.py``).  Going on to 1/128
+#: and 1/256 moves the worst vertex of the decimated 1 -> 2 (a mouth corner) only from
+#: 2.36 to 2.28 % IOD.
+REGISTRATION_FINE_SCALES = (0.03125, 0.015625)
 #: The weight of the membrane term of :func:`register_surface` against its thin plate.
 #: Measured on six ICT identity pairs (``benchmarks/bench_clone_ict.py --pairs``): 0.3,
 #: 0.5 and 1 all lower the mean cloning error by 7-8 % against 0 (the thin plate alone);

@@ -245,7 +245,7 @@ def _use_true_surface_points() -> None:
     """Make the default cloner's registration return the true surface points."""
     import mpeg4fba.cloning.fmc as fmc
 
-    def register(self, warped):
+    def register(self, warped, scales=None):
         out = warped.copy()
         ft, nt = self.tgt.offsets["Skin"]
         out[ft:ft + nt] = _true_surface_points(self)

@@ -127,9 +127,9 @@ OUTSIDE_RULES = ("nearby", "global")
 #: 2D interpolation between feature points can't see how a surface seen edge-on by the
 #: projection (under the chin, the neck) differs between two faces; the 3D steps can.
 #: On six pairs of ICT identities onto decimated skins (``benchmarks/bench_clone_ict.py
-#: --pairs``), the median of the largest errors falls from 26 % of the eye distance
-#: (paper) to 12 (steps 1 and 4 with 2D weights) and 3.3 (all four steps, surface
-#: weights), the mean error from 0.21 to 0.13 and 0.067 %.
+#: --pairs``), the median of the largest errors falls from 17 % of the eye distance
+#: (paper) to 12 (steps 1 and 4 with 2D weights) and 2.7 (all five steps, surface
+#: weights), the mean error from 0.21 to 0.13 and 0.060 %.
 ALIGNMENTS = ("surface", "paper")
 
 #: Where the target's weights over the source's vertices come from.  "2d": the paper's

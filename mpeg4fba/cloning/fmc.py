@@ -61,9 +61,8 @@ from .parts import (HEAD, PARTS, find_parts, lowest_common_transform, source_tra
 from .projection import MOUTH_ANGLE
 from .rigid import axis_angle, fit_rigid, rotation_centre, sphere_centre
 from .surface import (REGISTRATION_FINE_SCALES, REGISTRATION_MEMBRANE, closest_points,
-                      feature_warp,
-                      loop_correspondence, neck_cut, register_surface, surface_biharmonic,
-                      surface_weights, triangle_normals, vertex_normals)
+                      feature_warp, loop_correspondence, neck_cut, register_surface,
+                      surface_biharmonic, surface_weights, triangle_normals, vertex_normals)
 
 __all__ = ["clone", "FacialMotionCloner", "CloneWarning", "required_points_missing",
            "OVERLAP_RULES", "OUTSIDE_RULES", "METHODS", "ALIGNMENTS", "NECK_RATIO",
@@ -258,9 +257,10 @@ class FacialMotionCloner:
     :data:`NECK_RATIO`); ``register`` (fit the target's skin onto the source's, step 3 of
     :data:`ALIGNMENTS`; ``membrane`` weighs its membrane term against its thin plate,
     :data:`~mpeg4fba.cloning.surface.REGISTRATION_MEMBRANE`, 0 for the thin plate
-    alone; ``refine``: go on to :data:`~mpeg4fba.cloning.surface.REGISTRATION_FINE_SCALES`
-    for the surface points, the regions staying with the stiffer fit); ``interpolation`` (:data:`INTERPOLATIONS`; by default "surface"
-    with the surface alignment, "2d" with the paper's); ``facing`` (with the surface
+    alone; ``refine``: go on to
+    :data:`~mpeg4fba.cloning.surface.REGISTRATION_FINE_SCALES` for the surface points,
+    the regions staying with the stiffer fit); ``interpolation`` (:data:`INTERPOLATIONS`;
+    by default "surface" with the surface alignment, "2d" with the paper's); ``facing`` (with the surface
     interpolation, how much a source sheet facing against the target vertex counts
     against it, :data:`FACING`, 0 to turn it off); ``overlap`` (:data:`OVERLAP_RULES`); ``outside`` (:data:`OUTSIDE_RULES`); ``rigid_tolerance`` (how far a part's mesh motion may be from rigid, as a
     fraction of its size, to become a Transform motion); ``min_motion`` (target vertices

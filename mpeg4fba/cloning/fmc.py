@@ -62,7 +62,8 @@ from .projection import MOUTH_ANGLE
 from .rigid import axis_angle, fit_rigid, rotation_centre, sphere_centre
 from .surface import (REGISTRATION_FINE_SCALES, REGISTRATION_MEMBRANE, closest_points,
                       feature_warp, loop_correspondence, neck_cut, register_surface,
-                      surface_biharmonic, surface_weights, triangle_normals, vertex_normals)
+                      surface_biharmonic, surface_weights, triangle_edges, triangle_normals,
+                      vertex_normals)
 
 __all__ = ["clone", "FacialMotionCloner", "CloneWarning", "required_points_missing",
            "OVERLAP_RULES", "OUTSIDE_RULES", "METHODS", "ALIGNMENTS", "NECK_RATIO",
@@ -1057,11 +1058,10 @@ class _Installer:
 
 def _mean_edge(vertices: np.ndarray, triangles: np.ndarray) -> np.ndarray:
     """(n,) mean length of the edges at each vertex (0 for a vertex in no triangle)."""
-    e = np.concatenate([triangles[:, [0, 1]], triangles[:, [1, 2]], triangles[:, [2, 0]]])
-    length = np.linalg.norm(vertices[e[:, 0]] - vertices[e[:, 1]], axis=1)
+    i, j, length = triangle_edges(vertices, triangles)
     n = len(vertices)
-    total = np.bincount(e[:, 0], length, n) + np.bincount(e[:, 1], length, n)
-    count = np.bincount(e[:, 0], minlength=n) + np.bincount(e[:, 1], minlength=n)
+    total = np.bincount(i, length, n) + np.bincount(j, length, n)
+    count = np.bincount(i, minlength=n) + np.bincount(j, minlength=n)
     return total / np.maximum(count, 1)
 
 

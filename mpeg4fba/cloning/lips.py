@@ -48,6 +48,8 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.csgraph import dijkstra
 
+from .surface import triangle_edges
+
 __all__ = ["OUTSIDE", "UPPER", "LOWER", "Slit", "LIPS", "LEFT_EYELIDS", "RIGHT_EYELIDS",
            "SLITS", "UPPER_LIP_POLYGON", "LOWER_LIP_POLYGON", "LIP_POINTS", "lip_regions",
            "slit_regions", "points_in_polygon", "opposite", "CORNER"]
@@ -193,9 +195,8 @@ def slit_regions(uv: np.ndarray, points_uv: Mapping, *, slits: Sequence[Slit] = 
 
 
 def _edges(tris: np.ndarray, v: np.ndarray) -> tuple:
-    i = np.concatenate([tris[:, 0], tris[:, 1], tris[:, 2]])
-    j = np.concatenate([tris[:, 1], tris[:, 2], tris[:, 0]])
-    return i, j, np.linalg.norm(v[i] - v[j], axis=1) + 1e-12
+    i, j, length = triangle_edges(v, tris)
+    return i, j, length + 1e-12           # a zero weight would be no edge to dijkstra
 
 
 def lip_regions(uv: np.ndarray, points_uv: Mapping, *, triangles: Optional[np.ndarray] = None,

@@ -19,9 +19,8 @@ from scipy.spatial import cKDTree
 
 __all__ = ["closest_points", "point_triangle", "feature_warp", "boundary_loops", "neck_cut",
            "loop_correspondence", "surface_biharmonic", "vertex_normals", "triangle_normals",
-           "register_surface",
-           "REGISTRATION_SCALES", "REGISTRATION_FINE_SCALES", "REGISTRATION_MEMBRANE",
-           "surface_weights",
+           "triangle_edges", "register_surface", "REGISTRATION_SCALES",
+           "REGISTRATION_FINE_SCALES", "REGISTRATION_MEMBRANE", "surface_weights",
            "triangle_neighbours"]
 
 #: The stiffness schedule of :func:`register_surface`: the length scales (in the units of
@@ -321,6 +320,21 @@ def surface_biharmonic(vertices: np.ndarray, triangles: np.ndarray, fixed: np.nd
     solve = _factorise(Qff + eps * sp.eye(len(free)))
     out[free] = solve(np.ascontiguousarray(-(Qf[:, fixed] @ values)))
     return out
+
+
+def triangle_edges(vertices: np.ndarray, triangles: np.ndarray) -> tuple:
+    """(i, j, length): the three edges of every triangle, corner 0 -> 1, 1 -> 2, 2 -> 0
+    (3m each, a shared edge once per triangle), and their lengths.
+
+    >>> i, j, d = triangle_edges(np.array([[0.0, 0, 0], [3, 0, 0], [0, 4, 0]]), np.array([[0, 1, 2]]))
+    >>> i.tolist(), j.tolist(), d.tolist()
+    ([0, 1, 2], [1, 2, 0], [3.0, 5.0, 4.0])
+    """
+    V = np.asarray(vertices, dtype=np.float64)
+    T = np.asarray(triangles, dtype=np.int64).reshape(-1, 3)
+    i = np.concatenate([T[:, 0], T[:, 1], T[:, 2]])
+    j = np.concatenate([T[:, 1], T[:, 2], T[:, 0]])
+    return i, j, np.linalg.norm(V[i] - V[j], axis=1)
 
 
 def triangle_normals(vertices: np.ndarray, triangles: np.ndarray) -> np.ndarray:

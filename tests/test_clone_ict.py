@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from benchmarks import ict
-from benchmarks.bench_clone_ict import EXPRESSIONS, evaluate
+from benchmarks.bench_clone_ict import EXPRESSIONS, evaluate, source_motion
 from mpeg4fba.cloning import LOWER, UPPER, FacialMotionCloner
 
 
@@ -22,12 +22,13 @@ def data(ict_data):
     return ict_data
 
 
-def _clone(data, a: int, b: int) -> tuple:
+def _clone(data, a: int, b: int, **options) -> tuple:
     source = ict.ict_face(data, ict.identity(data, a), name=f"ICT-{a}")
     target = ict.ict_face_decimated(data, ict.identity(data, b), 0.25, name=f"ICT-{b}")
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        return source, target, FacialMotionCloner(source, target, scale_motion=False)
+        return source, target, FacialMotionCloner(source, target, scale_motion=False,
+                                                  **options)
 
 
 def _row(face, skin: dict, ict_id: int) -> int:
@@ -45,22 +46,41 @@ def test_a_sliver_off_the_lip_corner_stays_on_its_lip(data):
     assert c.source_regions[_row(source, c.source_skin, 6072)] == UPPER
     assert c.target_regions[_row(target, c.target_skin, 6072)] == UPPER
     res = evaluate(c, source, target, ["jawOpen"], data)["jawOpen"]
-    assert res["all"][2] < 2.5, res["all"]          # was 24.05 % IOD; now 2.11
+    assert res["all"][2] < 2.5, res["all"]          # was 24.05 % IOD; now 1.65
     assert res["flipped"][0] <= res["flipped"][1]
 
 
-def test_decimated_pair_meets_the_mean_and_flip_goals(data):
+def test_decimated_pair_meets_the_goals(data):
     """ICT 1 -> 2, decimated target, scaling off (the issue's table): mean <= 0.10 %
-    IOD and no more flipped triangles than the truth over the eight expressions.  The
-    largest error, 2.36 % against a goal of 2.0, is held under 2.5 so it can't slip
-    back."""
+    IOD, largest error <= 2.0 (1.91; 2.36 before the feature points were held loosely
+    on a coarse target) and no more flipped triangles than the truth over the eight
+    expressions."""
     source, target, c = _clone(data, 1, 2)
     res = evaluate(c, source, target, list(EXPRESSIONS), data)
     means = [row["all"][0] for row in res.values()]
     assert np.mean(means) <= 0.10
     assert max(row["flipped"][0] - row["flipped"][1] for row in res.values()) <= 0
-    assert max(row["all"][2] for row in res.values()) < 2.5
+    assert max(row["all"][2] for row in res.values()) <= 2.0
     # the lip regions of the two lips are both present on the target
     first, n = c.target_skin["Skin"]
     labels = c.target_regions[first:first + n]
     assert (labels == UPPER).sum() > 20 and (labels == LOWER).sum() > 20
+
+
+def test_a_coarse_target_holds_its_feature_points_loosely(data):
+    """Decimated 1 -> 2: ICT 6070, 4 % of the eye distance behind the lip corner 2.4
+    and joined to it by one sliver, was dragged along by the held corner in the finer
+    fit (2.36 % IOD off under jawOpen); held loosely (LOOSE_PIN_RESOLUTION) it is 1.91."""
+    def error(c, source, target):
+        full = data.expression_deltas(["jawOpen"])
+        moved = c.map_skin(source_motion(c, source, ict.split_deltas(source, full)))
+        row = _row(target, c.target_skin, 6070)
+        truth = ict.split_deltas(target, full)["Skin"][0]
+        first, _ = c.target_skin["Skin"]
+        iod = float(np.linalg.norm(target.points["3.5"] - target.points["3.6"]))
+        return float(np.linalg.norm(moved[row] - truth[row - first])) / iod * 100
+
+    source, target, c = _clone(data, 1, 2)
+    loose = error(c, source, target)
+    _, _, held = _clone(data, 1, 2, loose_pins=np.inf)
+    assert loose < 2.0 < error(held, source, target)

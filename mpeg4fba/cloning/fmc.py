@@ -67,7 +67,8 @@ from .surface import (REGISTRATION_FINE_SCALES, REGISTRATION_MEMBRANE, closest_p
 
 __all__ = ["clone", "FacialMotionCloner", "CloneWarning", "required_points_missing",
            "OVERLAP_RULES", "OUTSIDE_RULES", "METHODS", "ALIGNMENTS", "NECK_RATIO",
-           "INTERPOLATIONS", "FACING", "FACING_RESOLUTION", "visible_triangles"]
+           "INTERPOLATIONS", "FACING", "FACING_RESOLUTION", "LOOSE_PIN_RESOLUTION",
+           "visible_triangles"]
 
 _SPEC = {p.name: p for p in PARTS}
 
@@ -119,10 +120,11 @@ OUTSIDE_RULES = ("nearby", "global")
 #: 4. each vertex goes to its closest point on the source's surface (of its mesh
 #:    group), whose 2D position is its aligned position for the lip and eyelid regions;
 #: 5. with ``register=True`` and ``refine=True``, the fit goes on to a sixty-fourth of
-#:    the face (:data:`~mpeg4fba.cloning.surface.REGISTRATION_FINE_SCALES`) and its
-#:    result is the surface points the surface weights are taken at; the regions stay
-#:    with step 4, since a vertex following the source's facets can cross the mouth's
-#:    mid line.
+#:    the face (:data:`~mpeg4fba.cloning.surface.REGISTRATION_FINE_SCALES`), feature
+#:    points where the target is much coarser than the source held loosely
+#:    (:data:`LOOSE_PIN_RESOLUTION`), and its result is the surface points the surface
+#:    weights are taken at; the regions stay with step 4, since a vertex following the
+#:    source's facets can cross the mouth's mid line.
 #:
 #: 2D interpolation between feature points can't see how a surface seen edge-on by the
 #: projection (under the chin, the neck) differs between two faces; the 3D steps can.
@@ -196,6 +198,23 @@ FACING = 0.01
 #: within 1.8 times.  Without this rule a vertex of such a patch at a mouth corner
 #: (ICT 2 -> 1, decimated) went from 0.2 to 6.5 % of the eye distance.
 FACING_RESOLUTION = 2.0
+#: How much coarser than the source (as for :data:`FACING_RESOLUTION`) the target's mesh
+#: must be round a feature point for the point to be held loosely in the finer fit
+#: (``refine=True``): pulled to its place on the source like any vertex to the surface,
+#: then put back there exactly.  A held point ties its neighbours to it over an edge of
+#: the target, and on a coarse mesh that edge is longer than the scales the finer fit
+#: works at: on ICT 1 -> 2 decimated, a vertex 4 % of the eye distance behind the left
+#: lip corner (2.4), joined to it by one sliver, was dragged along with it, 1.2 % IOD
+#: from its true place (1.0 loosely, 0.75 on the full mesh) and 2.36 % IOD off under
+#: jawOpen (1.91 loosely).  On a mesh as fine as the source's, holding the points is
+#: right: loosened there, the lip corners' neighbours slide 0.7 % IOD along the lips
+#: (1 -> 2 onto the full mesh: largest error 2.56 -> 7.25).  On six ICT pairs
+#: (``benchmarks/bench_clone_ict.py --pairs``) the decimated targets' points are 1.2 to
+#: 24 times as coarse as the source's (medians 3.1 to 3.7 on 1 -> 2, 3 -> 4, 5 -> 6), the
+#: full meshes' 0.6 to 1.5 times; loosening above 2 takes the decimated targets' median of the largest errors from
+#: 2.71 to 2.49 % IOD, errors over 2 % from 76 to 74 and flips from 3 to 2, and leaves
+#: the full meshes as they were (above 1.5: the same; above 3: 2.63).
+LOOSE_PIN_RESOLUTION = 2.0
 
 
 class CloneWarning(UserWarning):
@@ -260,7 +279,9 @@ class FacialMotionCloner:
     :data:`~mpeg4fba.cloning.surface.REGISTRATION_MEMBRANE`, 0 for the thin plate
     alone; ``refine``: go on to
     :data:`~mpeg4fba.cloning.surface.REGISTRATION_FINE_SCALES` for the surface points,
-    the regions staying with the stiffer fit); ``interpolation`` (:data:`INTERPOLATIONS`;
+    the regions staying with the stiffer fit; ``loose_pins``: how much coarser than the
+    source the target must be round a feature point for it to be held loosely there,
+    :data:`LOOSE_PIN_RESOLUTION`, ``inf`` to hold them all fast); ``interpolation`` (:data:`INTERPOLATIONS`;
     by default "surface" with the surface alignment, "2d" with the paper's); ``facing`` (with the surface
     interpolation, how much a source sheet facing against the target vertex counts
     against it, :data:`FACING`, 0 to turn it off); ``overlap`` (:data:`OVERLAP_RULES`); ``outside`` (:data:`OUTSIDE_RULES`); ``rigid_tolerance`` (how far a part's mesh motion may be from rigid, as a
@@ -277,7 +298,7 @@ class FacialMotionCloner:
                  by_mesh: bool = True, alignment: str = "surface", neck: bool = True,
                  register: bool = True, interpolation: Optional[str] = None,
                  membrane: float = REGISTRATION_MEMBRANE, facing: float = FACING,
-                 refine: bool = True):
+                 refine: bool = True, loose_pins: float = LOOSE_PIN_RESOLUTION):
         _check_faces(source, target)
         if outside not in OUTSIDE_RULES:
             raise ValueError(f"outside must be one of {OUTSIDE_RULES}, not {outside!r}")
@@ -319,6 +340,9 @@ class FacialMotionCloner:
         self.facing = float(facing)
         if not np.isfinite(self.facing) or self.facing < 0:
             raise ValueError(f"facing must be a finite number >= 0, not {facing!r}")
+        self.loose_pins = float(loose_pins)
+        if np.isnan(self.loose_pins) or self.loose_pins < 0:
+            raise ValueError(f"loose_pins must be a number >= 0 (inf: never), not {loose_pins!r}")
         #: whether the neck cuts were pinned onto each other (:data:`NECK_RATIO`)
         self.neck_pinned = False
         #: with alignment="surface": the target's skin vertices placed on the source's
@@ -411,11 +435,7 @@ class FacialMotionCloner:
         if self.facing <= 0:
             return None
         out = np.zeros((len(self.tgt.normalised), 3))
-        src_v, src_t = self.src.normalised, self.src.triangles
-        src_edge = _mean_edge(src_v, src_t)
-        src_n = vertex_normals(src_v, src_t)
-        on = np.unique(src_t)
-        tree = cKDTree(src_v[on])
+        src_n = vertex_normals(self.src.normalised, self.src.triangles)
         for name, (first, n) in self.tgt.offsets.items():
             v = self.tgt.normalised[first:first + n]
             tris = self.target.meshes[name].triangles
@@ -427,14 +447,31 @@ class FacialMotionCloner:
             agree = np.ones(n)
             for k in range(3):
                 np.minimum.at(agree, tris[:, k], (face * normal[tris[:, k]]).sum(axis=1))
-            _, near = tree.query(self.surface_points[first:first + n])
-            near = on[near]
+            ratio, near = self._coarseness(v, tris, self.surface_points[first:first + n])
             if np.median((normal * src_n[near]).sum(axis=1)) < 0:
                 normal = -normal          # wound the other way round from the source
-            coarse = _mean_edge(v, tris) > FACING_RESOLUTION * src_edge[near]
+            coarse = ratio > FACING_RESOLUTION
             normal[(agree <= 0.5) | coarse] = 0.0
             out[first:first + n] = normal
         return out
+
+    @cached_property
+    def _source_edges(self) -> tuple:
+        """(mean edge length round each source skin vertex, rows in triangles, their
+        k-d tree) in the normalised space."""
+        on = np.unique(self.src.triangles)
+        return _mean_edge(self.src.normalised, self.src.triangles), on, \
+            cKDTree(self.src.normalised[on])
+
+    def _coarseness(self, vertices: np.ndarray, triangles: np.ndarray,
+                    places: np.ndarray) -> tuple:
+        """(ratio, near): for each vertex of a target mesh (``vertices`` normalised,
+        ``triangles``), the mean length of its edges over that round ``near``, the source
+        skin vertex nearest its place on the source (``places``)."""
+        edge, on, tree = self._source_edges
+        _, k = tree.query(places)
+        near = on[k]
+        return _mean_edge(vertices, triangles) / np.maximum(edge[near], 1e-300), near
 
     def _surface_align(self) -> None:
         """The "surface" refinement of the alignment (see :data:`ALIGNMENTS`)."""
@@ -450,7 +487,7 @@ class FacialMotionCloner:
             warped = self._register(warped)
         # the 2D positions (for the regions) from the stiffer fit, the surface points
         # from the finer one (see REGISTRATION_FINE_SCALES)
-        self.surface_points = self._register(warped, REGISTRATION_FINE_SCALES) \
+        self.surface_points = self._register(warped, REGISTRATION_FINE_SCALES, loosen=True) \
             if self.register and self.refine else warped
         source_3d = self.src.normalised
         tris = self.src.triangles
@@ -500,20 +537,32 @@ class FacialMotionCloner:
         self.neck_pinned = True
         return out
 
-    def _register(self, warped: np.ndarray, scales: Optional[tuple] = None) -> np.ndarray:
+    def _register(self, warped: np.ndarray, scales: Optional[tuple] = None,
+                  loosen: bool = False) -> np.ndarray:
         """``warped`` with the target's main skin fitted onto the source's main skin
         (:func:`~mpeg4fba.cloning.surface.register_surface`, over ``scales``, by default
-        its own), its feature points held."""
+        its own), its feature points held; with ``loosen``, those where the target is
+        coarser than the source (``loose_pins``, :data:`LOOSE_PIN_RESOLUTION`) are held
+        loosely during the fit and put back at the end."""
         if self.src.main is None or self.tgt.main is None:
             return warped
         ft, nt = self.tgt.offsets[self.tgt.main]
         fs, ns = self.src.offsets[self.src.main]
+        tris = self.target.meshes[self.tgt.main].triangles
+        pins = self.tgt.main_point_rows()
+        loose = None
+        if loosen and len(pins):
+            ratio, _ = self._coarseness(self.tgt.normalised[ft:ft + nt], tris,
+                                        warped[ft:ft + nt])
+            loose = pins[ratio[pins] > self.loose_pins]
         out = warped.copy()
         out[ft:ft + nt] = register_surface(
-            self.tgt.normalised[ft:ft + nt], self.target.meshes[self.tgt.main].triangles,
-            warped[ft:ft + nt], self.tgt.main_point_rows(),
+            self.tgt.normalised[ft:ft + nt], tris, warped[ft:ft + nt], pins,
             self.src.normalised[fs:fs + ns], self.source.meshes[self.src.main].triangles,
-            membrane=self.membrane, **({} if scales is None else {"scales": scales}))
+            membrane=self.membrane, loose=loose,
+            **({} if scales is None else {"scales": scales}))
+        if loose is not None:
+            out[ft + loose] = warped[ft + loose]
         return out
 
     def _support(self, support: float) -> np.ndarray:

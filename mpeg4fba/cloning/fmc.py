@@ -210,10 +210,11 @@ FACING_RESOLUTION = 2.0
 #: right: loosened there, the lip corners' neighbours slide 0.7 % IOD along the lips
 #: (1 -> 2 onto the full mesh: largest error 2.56 -> 7.25).  On six ICT pairs
 #: (``benchmarks/bench_clone_ict.py --pairs``) the decimated targets' points are 1.2 to
-#: 24 times as coarse as the source's (medians 3.1 to 3.7 on 1 -> 2, 3 -> 4, 5 -> 6), the
-#: full meshes' 0.6 to 1.5 times; loosening above 2 takes the decimated targets' median of the largest errors from
-#: 2.71 to 2.49 % IOD, errors over 2 % from 76 to 74 and flips from 3 to 2, and leaves
-#: the full meshes as they were (above 1.5: the same; above 3: 2.63).
+#: 24 times as coarse as the source's (medians 3.1 to 3.7 on 1 -> 2, 3 -> 4, 5 -> 6),
+#: the full meshes' 0.6 to 1.5 times.  Loosening above 2 takes the decimated targets'
+#: median of the largest errors from 2.71 to 2.49 % IOD, errors over 2 % from 76 to 74
+#: and flips from 3 to 2, and leaves the full meshes as they were (above 1.5: the same;
+#: above 3: a median of 2.63).
 LOOSE_PIN_RESOLUTION = 2.0
 
 
@@ -281,8 +282,8 @@ class FacialMotionCloner:
     :data:`~mpeg4fba.cloning.surface.REGISTRATION_FINE_SCALES` for the surface points,
     the regions staying with the stiffer fit; ``loose_pins``: how much coarser than the
     source the target must be round a feature point for it to be held loosely there,
-    :data:`LOOSE_PIN_RESOLUTION`, ``inf`` to hold them all fast); ``interpolation`` (:data:`INTERPOLATIONS`;
-    by default "surface" with the surface alignment, "2d" with the paper's); ``facing`` (with the surface
+    :data:`LOOSE_PIN_RESOLUTION`, ``inf`` to hold them all fast); ``interpolation``
+    (:data:`INTERPOLATIONS`; by default "surface" with the surface alignment, "2d" with the paper's); ``facing`` (with the surface
     interpolation, how much a source sheet facing against the target vertex counts
     against it, :data:`FACING`, 0 to turn it off); ``overlap`` (:data:`OVERLAP_RULES`); ``outside`` (:data:`OUTSIDE_RULES`); ``rigid_tolerance`` (how far a part's mesh motion may be from rigid, as a
     fraction of its size, to become a Transform motion); ``min_motion`` (target vertices

@@ -391,7 +391,7 @@ def register_surface(rest: np.ndarray, triangles: np.ndarray, start: np.ndarray,
     [0.2, 0.0, 0.0]
     >>> held = register_surface(V, T, V + [0, 0, 0.5], np.array([0]), V, T)
     >>> loose = register_surface(V, T, V + [0, 0, 0.5], np.array([0]), V, T, loose=np.array([0]))
-    >>> float(held[0, 2]), 0 < float(loose[0, 2]) < 0.5   # held where it starts, or pulled half way
+    >>> float(held[0, 2]), 0 < float(loose[0, 2]) < 0.5   # held, or pulled part of the way down
     (0.5, True)
     """
     R = np.asarray(rest, dtype=np.float64)

@@ -389,12 +389,13 @@ def test_the_finer_fit_moves_the_surface_points_and_keeps_the_regions(source, ta
 def test_feature_points_are_held_loosely_only_on_a_coarse_target(source, target):
     """In the finer fit a feature point is held loosely where the target's mesh is much
     coarser than the source's (LOOSE_PIN_RESOLUTION), and put back in place at the end."""
+    import mpeg4fba.cloning.fmc as fmc
     from mpeg4fba.cloning.surface import REGISTRATION_FINE_SCALES as FINE
     c, _ = quiet(FacialMotionCloner, source, target)
     stiff, _ = quiet(FacialMotionCloner, source, target, refine=False)
     first, n = c.tgt.offsets[c.tgt.main]
-    ratio, _ = c._coarseness(c.tgt.normalised[first:first + n],
-                             target.meshes[c.tgt.main].triangles,
+    ratio, _ = c._coarseness(fmc._mean_edge(c.tgt.normalised[first:first + n],
+                                            target.meshes[c.tgt.main].triangles),
                              stiff.surface_points[first:first + n])
     assert 0.5 < np.median(ratio) < 2        # two meshes of about the same resolution ...
     held = c._register(stiff.surface_points, FINE)

@@ -448,7 +448,8 @@ class FacialMotionCloner:
             agree = np.ones(n)
             for k in range(3):
                 np.minimum.at(agree, tris[:, k], (face * normal[tris[:, k]]).sum(axis=1))
-            ratio, near = self._coarseness(v, tris, self.surface_points[first:first + n])
+            ratio, near = self._coarseness(_mean_edge(v, tris),
+                                           self.surface_points[first:first + n])
             if np.median((normal * src_n[near]).sum(axis=1)) < 0:
                 normal = -normal          # wound the other way round from the source
             coarse = ratio > FACING_RESOLUTION
@@ -464,15 +465,14 @@ class FacialMotionCloner:
         return _mean_edge(self.src.normalised, self.src.triangles), on, \
             cKDTree(self.src.normalised[on])
 
-    def _coarseness(self, vertices: np.ndarray, triangles: np.ndarray,
-                    places: np.ndarray) -> tuple:
-        """(ratio, near): for each vertex of a target mesh (``vertices`` normalised,
-        ``triangles``), the mean length of its edges over that round ``near``, the source
-        skin vertex nearest its place on the source (``places``)."""
+    def _coarseness(self, edges: np.ndarray, places: np.ndarray) -> tuple:
+        """(ratio, near): for target vertices whose edges have the mean lengths ``edges``
+        (normalised space, :func:`_mean_edge`), those over the mean edge round ``near``,
+        the source skin vertex nearest each one's place on the source (``places``)."""
         edge, on, tree = self._source_edges
         _, k = tree.query(places)
         near = on[k]
-        return _mean_edge(vertices, triangles) / np.maximum(edge[near], 1e-300), near
+        return edges / np.maximum(edge[near], 1e-300), near
 
     def _surface_align(self) -> None:
         """The "surface" refinement of the alignment (see :data:`ALIGNMENTS`)."""
@@ -553,9 +553,9 @@ class FacialMotionCloner:
         pins = self.tgt.main_point_rows()
         loose = None
         if loosen and len(pins):
-            ratio, _ = self._coarseness(self.tgt.normalised[ft:ft + nt], tris,
-                                        warped[ft:ft + nt])
-            loose = pins[ratio[pins] > self.loose_pins]
+            edges = _mean_edge(self.tgt.normalised[ft:ft + nt], tris)[pins]
+            ratio, _ = self._coarseness(edges, warped[ft + pins])
+            loose = pins[ratio > self.loose_pins]
         out = warped.copy()
         out[ft:ft + nt] = register_surface(
             self.tgt.normalised[ft:ft + nt], tris, warped[ft:ft + nt], pins,

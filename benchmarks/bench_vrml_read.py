@@ -9,7 +9,11 @@ Cases (see benchmarks/README.md):
 2. read a generated ~50 MB ``IndexedFaceSet`` file, and the peak memory of doing so
    in a fresh subprocess, as a multiple of the numeric payload (numbers x 8 bytes);
 3. read a generated scene of 4,096 ``Transform/Shape/Appearance/Material/Box`` nodes;
-4. write (``dumps``) the scenes of cases 1 and 3.
+4. write (``dumps``) the scenes of cases 1 and 3;
+5. the lexer's growth curve on blank runs: a small file followed by 1k, 10k and 100k
+   blank characters, alone and before a lexing failure (a stray ``'``), and a run of
+   alternating comment and blank lines.  Each should grow linearly (until 2026-12 a
+   nested quantifier made the time double with every blank).
 
 Each timing is ``time.perf_counter`` around one call, after one warm-up call, best of
 3 (best of 1 with ``--quick``).  Reads time ``load(path)`` (the file read and UTF-8
@@ -213,6 +217,24 @@ def profile_top(fn, n=10) -> str:
 
 # -- main ------------------------------------------------------------------------------------
 
+def blank_tail(n: int) -> str:
+    """``n`` blank characters: spaces, commas, tabs and newlines."""
+    return (" ,\t\n" * (n // 4 + 1))[:n]
+
+
+def comment_tail(n: int) -> str:
+    """About ``n`` characters of alternating comment and blank lines."""
+    return ("# a comment  \n \t\n" * (n // 17 + 1))[:n]
+
+
+def try_loads(text: str):
+    """``loads(text)``, or the ``VRMLError`` it raises (the failure cases time that)."""
+    try:
+        return mvrml.loads(text)
+    except mvrml.VRMLError as e:
+        return e
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--quick", action="store_true", help="best of 1 instead of best of 3")
@@ -309,6 +331,17 @@ def main(argv=None) -> int:
             secs, text = best_of(lambda: mvrml.dumps(scene), reps)
             res.speed(f"write {name} (dumps)", len(text.encode("utf-8")), secs,
                       note="size = output text")
+
+        # 5. the lexer on blank runs
+        print("\n# lexer growth on blank runs (ms, best of reps)")
+        print(f"{'blanks':>8} {'trailing':>10} {'before stray quote':>19} {'comment/blank lines':>20}")
+        for n in (1_000, 10_000, 100_000):
+            row = []
+            for tail in (blank_tail(n), blank_tail(n) + "'", comment_tail(n)):
+                text = "#VRML V2.0 utf8\nGroup {}" + tail
+                secs, _ = best_of(lambda: try_loads(text), reps)
+                row.append(secs * 1e3)
+            print(f"{n:>8,} {row[0]:>10.2f} {row[1]:>19.2f} {row[2]:>20.2f}", flush=True)
 
         if args.profile:  # inside the with: the generated files still exist
             if not to_profile:

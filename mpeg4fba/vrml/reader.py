@@ -107,11 +107,19 @@ class _FastLexer(Lexer):
                 self.punct[t.pattern.value] = name
             else:
                 self.word_terminals.append((name, re.compile(rx[t.name])))
-        skip = "|".join(rx[n] for n in lexer_conf.ignore)
+        # Blanks and comments in a form with exactly one way to split any run of them:
+        # "(?:SEPARATOR|COMMENT)*" lets the regex engine re-split a run of n blanks in
+        # 2**n ways when what follows fails to match, so a file ending in 40 blanks
+        # took days.  Here each comment takes the separators after it, and a
+        # separator run cannot follow a separator run.
+        sep, comment = rx["SEPARATOR"], rx["COMMENT"]
+        if set(lexer_conf.ignore) != {"SEPARATOR", "COMMENT"}:
+            raise AssertionError("the VRML grammar ignores SEPARATOR and COMMENT only")
+        skip = f"(?:{sep})?(?:(?:{comment})(?:{sep})?)*"
         punct = "|".join(re.escape(p) for p in sorted(self.punct, key=len, reverse=True))
-        self.skip_re = re.compile(f"(?:{skip})*")
+        self.skip_re = re.compile(skip)
         self.master = re.compile(
-            f"(?:{skip})*(?:(?P<ID>{rx['ID']})|(?P<NUMBERS>{rx['NUMBERS']})|(?P<STRING>{rx['STRING']})"
+            f"{skip}(?:(?P<ID>{rx['ID']})|(?P<NUMBERS>{rx['NUMBERS']})|(?P<STRING>{rx['STRING']})"
             f"|(?P<P>{punct}))", re.S)
         gi = self.master.groupindex
         self.groups = (gi["ID"], gi["NUMBERS"], gi["STRING"], gi["P"])

@@ -3,39 +3,18 @@
 Until 2026-12 the lexer's skip pattern was ``(?:[\\s,]+|COMMENT)*``: a run of n blanks
 that a failing match backed out of was re-split in 2**n ways, so a valid file ending in
 40 blanks took days.  Each case here would never end with that pattern; an alarm far
-above the expected milliseconds turns a hang into a failure.
+above the expected milliseconds (``_guards.alarm``) turns a hang into a failure.
 """
 from __future__ import annotations
 
-import signal
-import threading
-from contextlib import contextmanager
-
 import pytest
+
+from _guards import alarm
 
 from mpeg4fba import vrml
 
 HEADER = "#VRML V2.0 utf8\n"
 N = 10_000
-
-
-@contextmanager
-def alarm(seconds: int = 30):
-    """Fail instead of hanging (SIGALRM; a no-op where there is none)."""
-    if not hasattr(signal, "SIGALRM") or threading.current_thread() is not threading.main_thread():
-        yield
-        return
-
-    def timeout(signum, frame):
-        raise AssertionError(f"the lexer took more than {seconds} s: not linear")
-
-    old = signal.signal(signal.SIGALRM, timeout)
-    signal.alarm(seconds)
-    try:
-        yield
-    finally:
-        signal.alarm(0)
-        signal.signal(signal.SIGALRM, old)
 
 
 def blanks(n: int = N) -> str:

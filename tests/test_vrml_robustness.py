@@ -7,11 +7,12 @@ import errno
 import gzip
 import os
 import re
-import time
 import warnings
 
 import numpy as np
 import pytest
+
+from _guards import alarm
 
 from mpeg4fba import vrml
 from mpeg4fba.vrml import Node, Scene
@@ -98,9 +99,7 @@ def test_200mb_point_list(tmp_path):
                 f.write(block)
             f.write("%r %r %r\n  ] }\n  coordIndex [ 0 1 2 -1 ]\n} }\n" % last)
         assert os.path.getsize(path) > 190_000_000
-        t0 = time.perf_counter()
-        scene = vrml.load(path)
-        elapsed = time.perf_counter() - t0
+        scene = vrml.load(path)   # its speed: benchmarks/bench_vrml_read.py
         ifs = scene.nodes[0]["geometry"]
         points = ifs["coord"]["point"]
         assert points.shape == (reps * len(block_pts) + 2, 3)
@@ -111,7 +110,6 @@ def test_200mb_point_list(tmp_path):
         assert np.array_equal(points[-1 - len(block_pts):-1], block_pts)
         assert ifs["coordIndex"].tolist() == [0, 1, 2, -1]
         del scene, ifs, points
-        assert elapsed < 120, f"reading 200 MB took {elapsed:.0f} s"
     finally:
         path.unlink(missing_ok=True)
     assert not path.exists()
@@ -231,22 +229,19 @@ def test_every_prefix_is_an_error_or_a_scene(mid_size_file):
     name, data = mid_size_file
     assert _quiet_loads(data.decode("utf-8", "surrogateescape")) is not None
     cuts = sorted(set(np.linspace(0, len(data), 50, dtype=int).tolist()))
-    started = time.perf_counter()
     outcomes = {"error": 0, "scene": 0}
     for cut in cuts:
         text = data[:cut].decode("utf-8", "surrogateescape")   # a cut may split a character
-        t0 = time.perf_counter()
         try:
-            result = _quiet_loads(text, path=name)
+            with alarm(30, f"reading the cut at {cut} of {name}"):
+                result = _quiet_loads(text, path=name)
         except vrml.VRMLError as e:
             assert e.line is not None, f"cut at {cut}: {e}"
             outcomes["error"] += 1
         else:
             assert isinstance(result, Scene)
             outcomes["scene"] += 1
-        assert time.perf_counter() - t0 < 10, f"cut at {cut} of {name} took too long"
     assert outcomes["error"] > 0
-    assert time.perf_counter() - started < 60
 
 
 # -- (f) gzip ------------------------------------------------------------------------------

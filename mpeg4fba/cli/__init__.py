@@ -41,6 +41,17 @@ class _Group(click.Group):
     """A click group that turns the errors users can fix into one line and exit code 1."""
 
     def invoke(self, ctx: click.Context) -> Any:
+        with warnings.catch_warnings():
+            # A library's deprecation is ours to fix, never a reason for the user's
+            # command to fail (as it does under -W error or a test runner's filter):
+            # hidden, or shown once with --verbose.  tests/test_dependencies.py runs the
+            # commands with --verbose and fails on any that is shown.
+            action = "default" if ctx.params.get("verbose") else "ignore"
+            for category in (DeprecationWarning, PendingDeprecationWarning):
+                warnings.simplefilter(action, category)
+            return self._invoke(ctx)
+
+    def _invoke(self, ctx: click.Context) -> Any:
         try:
             return super().invoke(ctx)
         except (VRMLError, ValueError, OSError) as e:
@@ -94,12 +105,18 @@ def warnings_to_stderr() -> Iterator[None]:
     >>> with warnings_to_stderr():
     ...     warnings.warn("careful")
     """
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always")
-        try:
+    caught: list = []
+    try:
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
             yield
-        finally:
-            for w in caught:
+    finally:
+        for w in caught:
+            if issubclass(w.category, (DeprecationWarning, PendingDeprecationWarning)):
+                # a library's deprecation is for us, not the user: back to the filters
+                # outside (the command group hides it, or shows it with --verbose)
+                warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
+            else:
                 click.echo(f"mpeg4fba: warning: {' '.join(str(w.message).split())}", err=True)
 
 

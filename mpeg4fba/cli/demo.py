@@ -25,6 +25,7 @@ Example
 """
 from __future__ import annotations
 
+import sys
 import time
 import warnings
 from pathlib import Path
@@ -100,7 +101,7 @@ def demo(out_dir: str, quick: bool) -> None:
     steps = [("building the heads", build), ("cloning the motion", clone),
              ("validating the result", check), ("writing VRML, glTF, the player", write),
              ("rendering the preview", preview)]
-    with click.progressbar(steps, label="mpeg4fba demo", file=click.get_text_stream("stderr"),
+    with click.progressbar(steps, label="mpeg4fba demo", file=sys.stderr,
                            item_show_func=lambda s: s[0] if s else "") as bar:
         for label, step in bar:
             t0 = time.perf_counter()

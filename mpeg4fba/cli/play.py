@@ -25,6 +25,7 @@ Example
 from __future__ import annotations
 
 import os
+import sys
 from pathlib import Path
 from typing import Optional
 
@@ -133,7 +134,7 @@ def _png_frames(face, stream, folder: str, frames: range, size: str, view: str) 
     out = Path(folder)
     out.mkdir(parents=True, exist_ok=True)
     playback = face.play(stream)
-    with click.progressbar(frames, label="rendering frames", file=click.get_text_stream("stderr"),
+    with click.progressbar(frames, label="rendering frames", file=sys.stderr,
                            show_pos=True) as bar:
         for i in bar:
             save_png(out / f"frame_{i:04d}.png",

@@ -217,3 +217,144 @@ def test_bad_byte_length_and_data_uri_are_refused(tmp_path):
         read_morph_targets(_write_gltf(tmp_path / "tri.gltf", short))
     with pytest.raises(FormatError, match=r"only base64"):
         read_morph_targets(_write_gltf(tmp_path / "tri.gltf", "data:text/plain,abc"))
+
+
+# -- gzip bombs -------------------------------------------------------------------------------
+
+import gzip          # noqa: E402  (the gzip half of the file)
+import tracemalloc   # noqa: E402
+import zlib          # noqa: E402
+
+from click.testing import CliRunner   # noqa: E402
+
+from mpeg4fba import vrml             # noqa: E402
+from mpeg4fba.cli import main         # noqa: E402
+from mpeg4fba.vrml import inflate     # noqa: E402
+
+_HEADER = b"#VRML V2.0 utf8\n"
+
+
+def _gzip_stream(path: Path, head: bytes, filler: bytes, size: int) -> Path:
+    """``head`` then ``size`` bytes of ``filler`` repeated, gzipped a MiB at a time
+    (a bomb is written without ever holding it inflated)."""
+    c = zlib.compressobj(6, zlib.DEFLATED, 16 + zlib.MAX_WBITS)
+    block = (filler * ((1 << 20) // len(filler) + 1))[:1 << 20]
+    with open(path, "wb") as f:
+        f.write(c.compress(head))
+        for _ in range(size >> 20):
+            f.write(c.compress(block))
+        f.write(c.compress(block[:size & ((1 << 20) - 1)]))
+        f.write(c.flush())
+    return path
+
+
+def _scene_text(n: int) -> bytes:
+    """A real scene of about ``n`` bytes, not very compressible (numbers)."""
+    pts = np.random.default_rng(1).normal(size=(max(n // 30, 3), 3))
+    body = ", ".join(f"{x:.5f} {y:.5f} {z:.5f}" for x, y, z in pts)
+    return _HEADER + f"DEF P Shape {{ geometry PointSet {{ coord Coordinate {{ point [ {body} ] }} }} }}\n".encode()
+
+
+def test_bomb_stops_early_under_the_default_ratio(tmp_path):
+    bomb = _gzip_stream(tmp_path / "bomb.wrl.gz", _HEADER, b"\0", 50 << 20)
+    assert bomb.stat().st_size < 100 << 10
+    tracemalloc.start()
+    try:
+        with pytest.raises(vrml.VRMLError) as info:
+            vrml.load(bomb)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    e = info.value
+    assert e.path == str(bomb)
+    assert "max_ratio=1000" in e.message and "decompression bomb" in e.message, e.message
+    assert "--max-ratio" in e.message
+    assert peak < 40 << 20, f"{peak >> 20} MiB held: more than the ratio cap lets through"
+
+
+def test_bomb_stops_at_the_absolute_cap(tmp_path):
+    bomb = _gzip_stream(tmp_path / "bomb.txt", _HEADER, b"\0", 50 << 20)   # magic, not name
+    with pytest.raises(vrml.VRMLError) as info:
+        vrml.load(bomb, max_inflated=3 << 20, max_ratio=0)
+    e = info.value
+    assert e.path == str(bomb) and "more than 3.0 MiB" in e.message
+    assert "max_inflated=3145728" in e.message and "--max-inflated" in e.message, e.message
+
+
+def test_ordinary_gzip_still_reads(tmp_path):
+    text = _scene_text(600 << 10)            # several input chunks of compressed data
+    p = tmp_path / "points.wrl.gz"
+    p.write_bytes(gzip.compress(text, mtime=0))
+    assert p.stat().st_size > 2 * inflate._IN_CHUNK
+    want = vrml.loads(text.decode())
+    assert vrml.load(p) == want
+    # several members, as `cat a.gz b.gz` makes: read as one stream
+    half = len(text) // 2
+    p.write_bytes(gzip.compress(text[:half]) + gzip.compress(text[half:]))
+    assert vrml.load(p) == want
+    # the ratio cap is per compressed byte: a plain file is not limited at all
+    (tmp_path / "plain.wrl").write_bytes(text)
+    assert vrml.load(tmp_path / "plain.wrl", max_inflated=10) == want
+
+
+def test_keywords_raise_the_caps(tmp_path, monkeypatch):
+    # 2 MiB of spaces in a comment inflates ~1000:1; let the ratio apply from 64 KiB
+    monkeypatch.setattr(inflate, "RATIO_FREE", 64 << 10)
+    p = _gzip_stream(tmp_path / "spaces.wrl.gz", _HEADER + b"Group { }\n#", b" ", 2 << 20)
+    with pytest.raises(vrml.VRMLError, match="max_ratio"):
+        vrml.load(p)
+    assert vrml.load(p, max_ratio=0).nodes[0].type == "Group"
+    assert vrml.load(p, max_ratio=5000).nodes[0].type == "Group"
+    with pytest.raises(vrml.VRMLError, match="max_inflated"):
+        vrml.load(p, max_ratio=0, max_inflated=1 << 20)
+    with vrml.inflate_limits(max_inflated=1 << 20, max_ratio=0):   # a lower default ...
+        with pytest.raises(vrml.VRMLError, match="max_inflated"):
+            vrml.load(p)
+        assert vrml.load(p, max_inflated=4 << 20).nodes[0].type == "Group"   # ... raised
+    for bad in [{"max_inflated": 0}, {"max_inflated": 1.5}, {"max_ratio": -1}]:
+        with pytest.raises(ValueError):
+            vrml.load(p, **bad)
+
+
+def test_load_face_and_read_face_pass_the_caps_on(tmp_path):
+    from mpeg4fba.fba.face import FaceMesh, FaceModel
+    from mpeg4fba.formats.face_files import read_face
+    from mpeg4fba.formats.wrl_face import load_face, save_face
+    n = 40
+    grid = np.stack(np.meshgrid(np.arange(n), np.arange(n)), -1).reshape(-1, 2)
+    vertices = np.c_[grid, np.zeros(len(grid))] * 0.01
+    k = np.arange(n - 1)[:, None] * n + np.arange(n - 1)[None, :]
+    tris = np.r_[np.stack([k, k + 1, k + n], -1).reshape(-1, 3),
+                 np.stack([k + 1, k + n + 1, k + n], -1).reshape(-1, 3)]
+    p = tmp_path / "grid.wrl.gz"
+    save_face(FaceModel([FaceMesh("Grid", vertices, tris)]), p)
+    assert len(load_face(p).meshes["Grid"].vertices) == n * n
+    for read in (load_face, read_face):
+        with pytest.raises(vrml.VRMLError, match="max_inflated=1000") as info:
+            read(p, max_inflated=1000)
+        assert info.value.path == str(p)
+    assert len(read_face(p, max_inflated=10 << 20, max_ratio=0).meshes["Grid"].vertices) == n * n
+
+
+def test_cli_options_set_the_caps(tmp_path, monkeypatch):
+    monkeypatch.setattr(inflate, "RATIO_FREE", 64 << 10)
+    p = _gzip_stream(tmp_path / "spaces.wrl.gz", _HEADER + b"Group { }\n#", b" ", 2 << 20)
+    runner = CliRunner()
+    before = inflate._limits.get()
+    r = runner.invoke(main, ["info", str(p)])
+    assert r.exit_code == 1 and r.output.count("\n") == 1, r.output
+    assert r.output.startswith(f"mpeg4fba: error: {p}: gzip data inflates") and "--max-ratio" in r.output
+    r = runner.invoke(main, ["--max-ratio", "0", "info", str(p)])
+    assert r.exit_code == 0, r.output
+    r = runner.invoke(main, ["--max-ratio", "0", "--max-inflated", "1M", "info", str(p)])
+    assert r.exit_code == 1 and "max_inflated=1048576" in r.output, r.output
+    with vrml.inflate_limits(max_inflated=1 << 20, max_ratio=0):
+        assert runner.invoke(main, ["info", str(p)]).exit_code == 1
+        r = runner.invoke(main, ["--max-inflated", "4MiB", "info", str(p)])
+        assert r.exit_code == 0, r.output
+    assert inflate._limits.get() == before            # the options last one command
+    out = tmp_path / "out.wrl"
+    r = runner.invoke(main, ["convert", str(p), str(out)])
+    assert r.exit_code == 1 and not out.exists()      # no half-written output
+    r = runner.invoke(main, ["--max-inflated", "lots", "info", str(p)])
+    assert r.exit_code == 2 and "--max-inflated" in r.output

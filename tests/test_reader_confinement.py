@@ -13,19 +13,28 @@ from __future__ import annotations
 
 import base64
 import contextlib
+import gzip
+import importlib.util
 import json
 import os
 import signal
 import struct
+import tracemalloc
+import zlib
 from pathlib import Path
 
 import numpy as np
 import pytest
+from click.testing import CliRunner
 
+from mpeg4fba import vrml
+from mpeg4fba.cli import main
 from mpeg4fba.formats.errors import FormatError
 from mpeg4fba.formats.morph_targets import read_morph_targets
+from mpeg4fba.vrml import inflate
 
-pytest.importorskip("pygltflib")
+needs_gltf = pytest.mark.skipif(importlib.util.find_spec("pygltflib") is None,
+                                reason="reading glTF needs pygltflib")
 
 _TRIANGLE = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0]], dtype="<f4")
 _BLOB = _TRIANGLE.tobytes()          # 36 bytes
@@ -97,11 +106,13 @@ def _refused(path: Path, uri: str, *words: str) -> FormatError:
 
 # -- what still reads -------------------------------------------------------------------------
 
+@needs_gltf
 def test_relative_bin_reads(tmp_path):
     (tmp_path / "tri.bin").write_bytes(_BLOB)
     np.testing.assert_array_equal(_read(_write_gltf(tmp_path / "tri.gltf", "tri.bin")), _TRIANGLE)
 
 
+@needs_gltf
 def test_relative_bin_in_a_subfolder_and_percent_encoded_name_reads(tmp_path):
     (tmp_path / "data").mkdir()
     (tmp_path / "data" / "my tri.bin").write_bytes(_BLOB)
@@ -109,18 +120,21 @@ def test_relative_bin_in_a_subfolder_and_percent_encoded_name_reads(tmp_path):
         np.testing.assert_array_equal(_read(_write_gltf(tmp_path / "tri.gltf", uri)), _TRIANGLE)
 
 
+@needs_gltf
 def test_symlink_inside_the_folder_reads(tmp_path):
     (tmp_path / "real.bin").write_bytes(_BLOB)
     (tmp_path / "link.bin").symlink_to(tmp_path / "real.bin")
     np.testing.assert_array_equal(_read(_write_gltf(tmp_path / "tri.gltf", "link.bin")), _TRIANGLE)
 
 
+@needs_gltf
 def test_data_uri_and_glb_chunk_read(tmp_path):
     uri = "data:application/octet-stream;base64," + base64.b64encode(_BLOB).decode()
     np.testing.assert_array_equal(_read(_write_gltf(tmp_path / "tri.gltf", uri)), _TRIANGLE)
     np.testing.assert_array_equal(_read(_write_glb(tmp_path / "tri.glb", None, _BLOB)), _TRIANGLE)
 
 
+@needs_gltf
 def test_only_byte_length_bytes_are_read(tmp_path):
     # a sparse file far larger than memory: reading it all would never finish
     big = tmp_path / "big.bin"
@@ -133,6 +147,7 @@ def test_only_byte_length_bytes_are_read(tmp_path):
     np.testing.assert_array_equal(_read(_write_gltf(tmp_path / "tri.gltf", "big.bin")), _TRIANGLE)
 
 
+@needs_gltf
 def test_pygltflib_opens_no_buffer_or_image(tmp_path, monkeypatch):
     import pygltflib
 
@@ -157,6 +172,7 @@ def secret(tmp_path) -> Path:
     return tmp_path / "secret.bin"
 
 
+@needs_gltf
 @pytest.mark.parametrize("make_uri, why", [
     (lambda s: str(s), "absolute path"),
     (lambda s: "../secret.bin", "'..'"),
@@ -182,6 +198,7 @@ def test_uri_leading_out_is_refused(secret, make_uri, why, kind):
     assert "buffers[0].uri" in e.message
 
 
+@needs_gltf
 def test_symlink_leading_out_is_refused(secret):
     face = secret.parent / "face"
     (face / "link.bin").symlink_to(secret)
@@ -191,6 +208,7 @@ def test_symlink_leading_out_is_refused(secret):
         _refused(_write_gltf(face / "tri.gltf", uri), uri, "outside the folder")
 
 
+@needs_gltf
 def test_fifo_and_folder_are_refused(tmp_path):
     os.mkfifo(tmp_path / "pipe.bin")       # opening it for reading would wait for a writer
     (tmp_path / "dir.bin").mkdir()
@@ -198,6 +216,7 @@ def test_fifo_and_folder_are_refused(tmp_path):
         _refused(_write_gltf(tmp_path / "tri.gltf", uri), uri, "not a regular file")
 
 
+@needs_gltf
 def test_file_shorter_than_byte_length_is_refused(tmp_path):
     (tmp_path / "tri.bin").write_bytes(_BLOB)
     for declared in [len(_BLOB) + 4, 1 << 50]:
@@ -205,6 +224,7 @@ def test_file_shorter_than_byte_length_is_refused(tmp_path):
         _refused(path, "tri.bin", f"has {len(_BLOB)} bytes", f"byteLength {declared}")
 
 
+@needs_gltf
 def test_bad_byte_length_and_data_uri_are_refused(tmp_path):
     (tmp_path / "tri.bin").write_bytes(_BLOB)
     doc = _doc("tri.bin")
@@ -220,16 +240,6 @@ def test_bad_byte_length_and_data_uri_are_refused(tmp_path):
 
 
 # -- gzip bombs -------------------------------------------------------------------------------
-
-import gzip          # noqa: E402  (the gzip half of the file)
-import tracemalloc   # noqa: E402
-import zlib          # noqa: E402
-
-from click.testing import CliRunner   # noqa: E402
-
-from mpeg4fba import vrml             # noqa: E402
-from mpeg4fba.cli import main         # noqa: E402
-from mpeg4fba.vrml import inflate     # noqa: E402
 
 _HEADER = b"#VRML V2.0 utf8\n"
 
@@ -252,7 +262,8 @@ def _scene_text(n: int) -> bytes:
     """A real scene of about ``n`` bytes, not very compressible (numbers)."""
     pts = np.random.default_rng(1).normal(size=(max(n // 30, 3), 3))
     body = ", ".join(f"{x:.5f} {y:.5f} {z:.5f}" for x, y, z in pts)
-    return _HEADER + f"DEF P Shape {{ geometry PointSet {{ coord Coordinate {{ point [ {body} ] }} }} }}\n".encode()
+    shape = f"DEF P Shape {{ geometry PointSet {{ coord Coordinate {{ point [ {body} ] }} }} }}\n"
+    return _HEADER + shape.encode()
 
 
 def test_bomb_stops_early_under_the_default_ratio(tmp_path):
@@ -343,7 +354,8 @@ def test_cli_options_set_the_caps(tmp_path, monkeypatch):
     before = inflate._limits.get()
     r = runner.invoke(main, ["info", str(p)])
     assert r.exit_code == 1 and r.output.count("\n") == 1, r.output
-    assert r.output.startswith(f"mpeg4fba: error: {p}: gzip data inflates") and "--max-ratio" in r.output
+    assert r.output.startswith(f"mpeg4fba: error: {p}: gzip data inflates")
+    assert "--max-ratio" in r.output
     r = runner.invoke(main, ["--max-ratio", "0", "info", str(p)])
     assert r.exit_code == 0, r.output
     r = runner.invoke(main, ["--max-ratio", "0", "--max-inflated", "1M", "info", str(p)])

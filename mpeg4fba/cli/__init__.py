@@ -22,7 +22,8 @@ from typing import Any, Iterator, Optional
 import click
 
 from .. import __version__
-from ..vrml import Scene, VRMLError, load
+from ..vrml import Scene, VRMLError, inflate_limits, load
+from ..vrml.inflate import MAX_INFLATED, MAX_RATIO, RATIO_FREE
 
 __all__ = ["main", "read_scene", "warnings_to_stderr"]
 
@@ -69,11 +70,39 @@ class _Group(click.Group):
             ctx.exit(1)
 
 
+_UNITS = {"": 1, "K": 1 << 10, "M": 1 << 20, "G": 1 << 30, "T": 1 << 40}
+
+
+def _byte_size(ctx: click.Context, param: click.Parameter, value: Optional[str]) -> Optional[int]:
+    """``4G``, ``512M``, ``100k``, ``2GiB`` or plain bytes -> bytes (binary units).
+
+    >>> _byte_size(None, None, "4G"), _byte_size(None, None, "1.5MiB"), _byte_size(None, None, "10")
+    (4294967296, 1572864, 10)
+    """
+    if value is None:
+        return None
+    text = value.strip().upper().removesuffix("B").removesuffix("I")
+    number, unit = (text[:-1], text[-1]) if text[-1:] in _UNITS else (text, "")
+    try:
+        size = int(float(number) * _UNITS[unit])
+    except (ValueError, OverflowError):
+        size = 0
+    if size <= 0:
+        raise click.BadParameter(f"{value!r} is not a size in bytes > 0 (e.g. 4G, 512M, 1000000)")
+    return size
+
+
 @click.group(cls=_Group, context_settings={"help_option_names": ["-h", "--help"]})
 @click.option("--verbose", "-v", is_flag=True, help="Show tracebacks and more detail.")
+@click.option("--max-inflated", metavar="SIZE", callback=_byte_size,
+              help=f"Most a gzipped input may inflate to, e.g. 4G (default {MAX_INFLATED >> 30}G).")
+@click.option("--max-ratio", type=click.FloatRange(min=0), metavar="RATIO",
+              help=f"Most a gzipped input may inflate per compressed byte, past "
+                   f"{RATIO_FREE >> 20} MiB (default {MAX_RATIO}; 0: no limit).")
 @click.version_option(__version__, "--version", "-V", prog_name="mpeg4fba")
 @click.pass_context
-def main(ctx: click.Context, verbose: bool) -> None:
+def main(ctx: click.Context, verbose: bool, max_inflated: Optional[int] = None,
+         max_ratio: Optional[float] = None) -> None:
     """MPEG-4 Face and Body Animation toolkit.
 
     \b
@@ -83,6 +112,8 @@ def main(ctx: click.Context, verbose: bool) -> None:
     """
     ctx.ensure_object(dict)
     ctx.obj["verbose"] = verbose
+    # every file the subcommand reads is bounded by these, without passing them down
+    ctx.with_resource(inflate_limits(max_inflated, max_ratio))
 
 
 def read_scene(path: str, lenient: bool = False) -> Scene:

@@ -57,9 +57,12 @@ def read_points(path: PathLike, face: FaceModel) -> tuple:
     return points, fapu
 
 
-def read_face(path: PathLike, points: Optional[PathLike] = None, *, lenient: bool = False) -> FaceModel:
+def read_face(path: PathLike, points: Optional[PathLike] = None, *, lenient: bool = False,
+              max_inflated: Optional[int] = None, max_ratio: Optional[float] = None) -> FaceModel:
     """A FaceModel from a VRML face or a neutral mesh file, with feature points from
-    ``points`` (they replace the file's own; its FAPU too when the sidecar has one)."""
+    ``points`` (they replace the file's own; its FAPU too when the sidecar has one).
+    ``max_inflated`` / ``max_ratio`` bound a gzipped VRML face's inflation (see
+    :func:`mpeg4fba.vrml.load`)."""
     p = os.fspath(path)
     low = p.lower()
     if low.endswith(MESH_SUFFIXES):
@@ -67,7 +70,7 @@ def read_face(path: PathLike, points: Optional[PathLike] = None, *, lenient: boo
         face = read_morph_face(p, lenient=lenient)
     elif low.endswith(VRML_SUFFIXES):
         from .wrl_face import load_face
-        face = load_face(p, strict=not lenient)
+        face = load_face(p, strict=not lenient, max_inflated=max_inflated, max_ratio=max_ratio)
     else:
         raise FormatError(f"{p}: a face is read from VRML ({', '.join(VRML_SUFFIXES)}) or a "
                           f"mesh file ({', '.join(MESH_SUFFIXES)})")

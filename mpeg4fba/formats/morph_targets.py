@@ -49,6 +49,7 @@ import base64
 import json
 import os
 import re
+import stat
 import urllib.parse
 from dataclasses import dataclass, field
 from typing import Mapping, Optional, Sequence, Union
@@ -270,12 +271,97 @@ def _vrml_shapes(path: PathLike, lenient: bool) -> _Shapes:
 
 # -- glTF ----------------------------------------------------------------------------------
 
+# A URI scheme ("http:", "file:"; also a Windows drive "C:"), RFC 3986 section 3.1.
+_SCHEME = re.compile(r"[A-Za-z][A-Za-z0-9+.-]*:")
+
+
+def _shown(text: str, limit: int = 200) -> str:
+    """``text`` quoted, cut at ``limit`` characters (a URI may be megabytes long)."""
+    return repr(text) if len(text) <= limit else repr(text[:limit]) + "..."
+
+
+def _confined_read(path: str, uri: str, length: int, where: str) -> bytes:
+    """The first ``length`` bytes of the file a glTF ``uri`` names, read only when it is
+    a relative path to a regular file inside the folder of ``path`` (the glTF file);
+    anything else is a FormatError naming ``path``, ``where`` (``buffers[0]``) and the URI.
+
+    A face file must not make us read outside its folder: absolute paths, ``..``,
+    percent-encoded forms of either, symbolic links that lead out, other schemes,
+    devices and FIFOs (``/dev/zero`` would be read forever) are all refused.
+
+    >>> import os, tempfile
+    >>> d = tempfile.mkdtemp()
+    >>> _ = open(os.path.join(d, "a b.bin"), "wb").write(b"0123456789")
+    >>> _confined_read(os.path.join(d, "f.gltf"), "a%20b.bin", 4, "buffers[0]")
+    b'0123'
+    >>> _confined_read(os.path.join(d, "f.gltf"), "..%2Fetc%2Fpasswd", 4, "buffers[0]")
+    Traceback (most recent call last):
+    ...
+    mpeg4fba.formats.errors.FormatError: ...: buffers[0].uri '..%2Fetc%2Fpasswd': ...
+    """
+    def refuse(why: str) -> FormatError:
+        return FormatError(f"{where}.uri {_shown(uri)}: {why}; a buffer is read only from a "
+                           f"base64 data: URI or a relative path to a regular file inside "
+                           f"the glTF file's own folder", path)
+
+    scheme = _SCHEME.match(uri)
+    if scheme:
+        raise refuse(f"'{scheme.group(0)}' URIs are not read")
+    try:
+        name = urllib.parse.unquote(uri, errors="strict")
+    except UnicodeDecodeError:
+        raise refuse("its percent-encoding is not UTF-8") from None
+    if "\x00" in name:
+        raise refuse("it holds a NUL character")
+    if name.startswith(("/", "\\")) or os.path.isabs(name):
+        raise refuse("an absolute path")
+    if ".." in re.split(r"[/\\]", name):
+        raise refuse("'..' leads out of the folder")
+    folder = os.path.realpath(os.path.dirname(os.path.abspath(path)))
+    target = os.path.realpath(os.path.join(folder, name))
+    if os.path.commonpath([folder, target]) != folder:
+        raise refuse(f"it leads (through a symbolic link) to {target}, outside the folder")
+    # O_NONBLOCK: opening a FIFO must not wait for a writer; O_NOFOLLOW: a link swapped in
+    # since realpath() is not followed
+    flags = os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_NOFOLLOW", 0) | \
+        getattr(os, "O_BINARY", 0)
+    try:
+        fd = os.open(target, flags)
+    except OSError as e:
+        raise FormatError(f"{where}.uri {_shown(uri)}: can't read it: {e.strerror}",
+                          path) from None
+    try:
+        st = os.fstat(fd)
+        if not stat.S_ISREG(st.st_mode):
+            raise refuse("not a regular file")
+        if st.st_size < length:
+            raise FormatError(f"{where}.uri {_shown(uri)}: the file has {st.st_size} bytes, "
+                              f"fewer than the buffer's byteLength {length}", path)
+        chunks, left = [], length
+        while left:                     # read() may return less than asked
+            chunk = os.read(fd, min(left, 1 << 24))
+            if not chunk:               # the file shrank since fstat()
+                raise FormatError(f"{where}.uri {_shown(uri)}: the file ended before the "
+                                  f"buffer's byteLength {length}", path)
+            chunks.append(chunk)
+            left -= len(chunk)
+    finally:
+        os.close(fd)
+    return b"".join(chunks)
+
+
 _COMPONENTS = {5120: "<i1", 5121: "<u1", 5122: "<i2", 5123: "<u2", 5125: "<u4", 5126: "<f4"}
 _WIDTH = {"SCALAR": 1, "VEC2": 2, "VEC3": 3, "VEC4": 4, "MAT2": 4, "MAT3": 9, "MAT4": 16}
 
 
 class _Gltf:
-    """A loaded glTF with numpy access to its accessors."""
+    """A loaded glTF with numpy access to its accessors.
+
+    Buffers are read by us, never by pygltflib (whose helpers open any path a URI
+    names): only the GLB chunk, base64 ``data:`` URIs, and relative paths to regular
+    files inside the glTF file's own folder (see :func:`_confined_read`).  Images are
+    never opened.
+    """
 
     def __init__(self, path: PathLike):
         try:
@@ -283,10 +369,14 @@ class _Gltf:
         except ImportError as e:  # pragma: no cover - a declared dependency
             raise ImportError("reading glTF needs pygltflib (pip install pygltflib)") from e
         self.path = str(path)
-        with open(self.path, "rb"):      # a missing or unreadable file is an OSError
-            pass
+        with open(self.path, "rb") as f:      # a missing or unreadable file is an OSError
+            raw = f.read()
         try:
-            self.doc = GLTF2().load(self.path)
+            # parsed from bytes, GLB or JSON by the magic, so pygltflib touches no file
+            if raw[:4] == b"glTF":
+                self.doc = GLTF2.load_from_bytes(raw)
+            else:
+                self.doc = GLTF2.gltf_from_json(raw.decode("utf-8-sig"))
         except Exception as e:            # pygltflib raises many kinds on a bad file
             raise FormatError(f"not a readable glTF 2.0 file ({e})", self.path) from None
         if self.doc is None:
@@ -306,25 +396,36 @@ class _Gltf:
             try:
                 b = self.doc.buffers[i]
             except (IndexError, TypeError):
-                raise self.error(f"buffer {i} does not exist") from None
+                raise self.error(f"buffers[{i}] does not exist") from None
+            length = b.byteLength
+            if not isinstance(length, int) or isinstance(length, bool) or length < 0:
+                raise self.error(f"buffers[{i}].byteLength is {length!r}, not a whole number "
+                                 f">= 0")
             if b.uri is None:
                 data = self.doc.binary_blob()
                 if data is None:
-                    raise self.error(f"buffer {i} has no uri and the file no binary chunk")
-            elif b.uri.startswith("data:"):
-                try:
-                    data = base64.b64decode(b.uri.split(",", 1)[1])
-                except (IndexError, ValueError):
-                    raise self.error(f"buffer {i}: bad data URI") from None
+                    raise self.error(f"buffers[{i}] has no uri and the file no binary chunk")
+            elif not isinstance(b.uri, str):
+                raise self.error(f"buffers[{i}].uri is {b.uri!r}, not a string")
+            elif b.uri[:5].lower() == "data:":
+                data = self._data_uri(i, b.uri)
             else:
-                where = os.path.join(os.path.dirname(self.path), urllib.parse.unquote(b.uri))
-                try:
-                    with open(where, "rb") as f:
-                        data = f.read()
-                except OSError as e:
-                    raise self.error(f"buffer {i}: can't read {b.uri!r}: {e.strerror}") from None
+                data = _confined_read(self.path, b.uri, length, f"buffers[{i}]")
+            if len(data) < length:
+                raise self.error(f"buffers[{i}] holds {len(data)} bytes, fewer than its "
+                                 f"byteLength {length}")
             self._buffers[i] = bytes(data)
         return self._buffers[i]
+
+    def _data_uri(self, i: int, uri: str) -> bytes:
+        head, comma, payload = uri.partition(",")
+        if not comma or not head.lower().endswith(";base64"):
+            raise self.error(f"buffers[{i}].uri: a data: URI is read only base64-encoded "
+                             f"('data:<type>;base64,<data>'), not {_shown(uri, 60)}")
+        try:
+            return base64.b64decode(payload)
+        except ValueError:
+            raise self.error(f"buffers[{i}].uri: bad base64 data in the data: URI") from None
 
     def _view(self, view: int, offset: int, dtype: np.dtype, count: int, width: int,
               what: str) -> np.ndarray:

@@ -424,16 +424,20 @@ def face_from_scene(scene: Scene, path: Optional[str] = None, face: Optional[str
     return model
 
 
-def load_face(path: PathLike, strict: bool = True) -> FaceModel:
+def load_face(path: PathLike, strict: bool = True, *, max_inflated: Optional[int] = None,
+              max_ratio: Optional[float] = None) -> FaceModel:
     """Read a VRML face file (plain or gzipped) into a :class:`FaceModel`.
 
     ``strict=False`` reads the VRML leniently (unknown nodes and fields kept, with a
-    warning; see :func:`mpeg4fba.vrml.load`).  Raises VRMLError for VRML that can't be
-    read and FormatError for a scene that is not a face (see :func:`face_from_scene`).
+    warning; see :func:`mpeg4fba.vrml.load`).  ``max_inflated`` / ``max_ratio`` bound
+    how far gzip data may inflate (see :func:`mpeg4fba.vrml.load`).  Raises VRMLError
+    for VRML that can't be read and FormatError for a scene that is not a face (see
+    :func:`face_from_scene`).
     """
     from ..vrml import load
     p = os.fspath(path)
-    return face_from_scene(load(p, strict=strict), p)
+    return face_from_scene(load(p, strict=strict, max_inflated=max_inflated,
+                                max_ratio=max_ratio), p)
 
 
 # -- writing --------------------------------------------------------------------------------

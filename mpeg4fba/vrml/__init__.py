@@ -10,10 +10,11 @@ True
 from .catalogue import NODE_TYPES, VRML97_NODES, FieldDecl, NodeType
 from .errors import VRMLError
 from .fields import FIELD_TYPES, FieldType, Image
+from .inflate import inflate_limits
 from .reader import VRMLWarning, load, loads
 from .scene import ExternProto, Node, Proto, RawValue, Route, Scene
 from .writer import dump, dumps
 
 __all__ = ["load", "loads", "dump", "dumps", "Scene", "Node", "Proto", "ExternProto", "Route",
            "RawValue", "FieldDecl", "NodeType", "NODE_TYPES", "VRML97_NODES", "FIELD_TYPES",
-           "FieldType", "Image", "VRMLError", "VRMLWarning"]
+           "FieldType", "Image", "VRMLError", "VRMLWarning", "inflate_limits"]

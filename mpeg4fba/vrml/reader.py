@@ -16,13 +16,11 @@ Example
 from __future__ import annotations
 
 import difflib
-import gzip
 import os
 import re
 import sys
 import threading
 import warnings
-import zlib
 from importlib import resources
 from pathlib import Path
 from typing import Any, Optional, Union
@@ -34,6 +32,7 @@ from lark.exceptions import UnexpectedInput, VisitError
 
 from .errors import Source, VRMLError
 from .fields import FIELD_TYPES, FieldType, NumberError, parse_numbers, unquote_string
+from .inflate import read_maybe_gzipped
 
 __all__ = ["load", "loads", "parse_value", "VRMLWarning"]
 
@@ -914,24 +913,20 @@ def _decode(data: bytes, path: Optional[str]) -> str:
     return text
 
 
-def read_bytes(path: Union[str, os.PathLike]) -> bytes:
-    """The bytes of a VRML file, gunzipped when they start with gzip's magic bytes."""
-    p = str(path)
-    try:
-        with open(p, "rb") as f:
-            data = f.read()
-    except OSError as e:
-        raise VRMLError(f"can't read the file: {e.strerror}", p) from None
-    if data[:2] == b"\x1f\x8b":
-        try:
-            data = gzip.decompress(data)
-        except (OSError, EOFError, zlib.error) as e:
-            raise VRMLError(f"corrupt or truncated gzip data: {e}", p) from None
-    return data
+def read_bytes(path: Union[str, os.PathLike], max_inflated: Optional[int] = None,
+               max_ratio: Optional[float] = None) -> Union[bytes, bytearray]:
+    """The bytes of a VRML file, gunzipped (under bounds, see
+    :mod:`mpeg4fba.vrml.inflate`) when they start with gzip's magic bytes."""
+    return read_maybe_gzipped(path, max_inflated, max_ratio)
 
 
-def load(path: Union[str, os.PathLike], strict: bool = True):
+def load(path: Union[str, os.PathLike], strict: bool = True, *,
+         max_inflated: Optional[int] = None, max_ratio: Optional[float] = None):
     """Read a VRML97 file (plain or gzip-compressed, by its magic bytes) into a Scene.
+
+    Gzip data may inflate to at most ``max_inflated`` bytes and ``max_ratio`` times its
+    compressed size (None: the limits in force, by default 2 GiB and 1000 above 16 MiB;
+    see :mod:`mpeg4fba.vrml.inflate`); past them reading stops with a VRMLError.
 
     >>> import tempfile, os
     >>> p = os.path.join(tempfile.mkdtemp(), "a.wrl")
@@ -939,7 +934,7 @@ def load(path: Union[str, os.PathLike], strict: bool = True):
     >>> load(p).nodes[0].type
     'Shape'
     """
-    data = read_bytes(path)
+    data = read_bytes(path, max_inflated, max_ratio)
     head = data[3:80] if data.startswith(b"\xef\xbb\xbf") else data[:80]
     if not head.startswith(b"#"):
         # Say so before decoding: a binary or foreign file gets one clear line.

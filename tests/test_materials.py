@@ -110,7 +110,8 @@ def _green_in_mouth(image: np.ndarray, background) -> int:
     """Pixels of the marker colour (the teeth), checked to lie round the mouth: in the
     lower half of the face and its middle third across."""
     img = image.astype(int)
-    green = (img[..., 1] > 80) & (img[..., 1] > 2 * img[..., 0] + 20) & (img[..., 1] > 2 * img[..., 2] + 20)
+    g = img[..., 1]
+    green = (g > 80) & (g > 2 * img[..., 0] + 20) & (g > 2 * img[..., 2] + 20)
     face = np.abs(img - np.asarray(background)).sum(-1) > 30
     rows, cols = np.nonzero(face)
     r, c = np.nonzero(green)

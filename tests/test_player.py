@@ -409,7 +409,8 @@ def test_the_open_mouth_shows_the_teeth(browser, tmp_path):
     wide = _scene_pixels(p.shot())[:, :-20]
 
     def green(img):
-        return (img[..., 1] > 80) & (img[..., 1] > 2 * img[..., 0] + 20) & (img[..., 1] > 2 * img[..., 2] + 20)
+        g = img[..., 1]
+        return (g > 80) & (g > 2 * img[..., 0] + 20) & (g > 2 * img[..., 2] + 20)
     rows, cols = np.nonzero(np.abs(wide - np.array(BACKGROUND)).sum(-1) > 40)
     r, c = np.nonzero(green(wide))
     print(f"{len(r)} green pixels in the open mouth")

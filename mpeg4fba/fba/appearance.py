@@ -23,6 +23,7 @@ Example
 from __future__ import annotations
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 __all__ = ["mesh_color", "is_closed", "NAMED_COLORS", "SKIN_COLOR"]
 
@@ -50,7 +51,7 @@ def mesh_color(name: str) -> tuple:
     return SKIN_COLOR
 
 
-def is_closed(triangles) -> bool:
+def is_closed(triangles: ArrayLike) -> bool:
     """True when ``triangles`` [m, 3] enclose a volume, consistently wound: every
     directed edge occurs once and its reverse once.  False for an empty mesh.
 

@@ -665,7 +665,8 @@ def scene_from_face(face: FaceModel, *, protos: bool = True) -> Scene:
         coord = Node("Coordinate", point=m.vertices.copy())
         color, per_vertex = face.mesh_colors(n)
         # 4 decimals: well below a display's 1/255 step, and a third of the text
-        fields = {} if per_vertex is None else {"color": Node("Color", color=np.round(per_vertex, 4))}
+        fields = {} if per_vertex is None else \
+            {"color": Node("Color", color=np.round(per_vertex, 4))}
         # solid TRUE where back faces are never to be seen: two-sided, the inward-wound
         # mouth cavity would hide the teeth in a VRML browser
         ifs = Node("IndexedFaceSet", name=mnames[n], coord=coord, coordIndex=coord_index,

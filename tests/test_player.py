@@ -386,3 +386,57 @@ def test_without_webgl_the_page_says_so(browser, tmp_path, glb):
         assert p.page.is_visible("#msg") and "WebGL" in p.page.inner_text("#msg")
     finally:
         no_webgl.close()
+
+
+def _mouth_stream():
+    """Two frames, 1 s apart: the mouth closed, then wide open (viseme "aa" at full blend)."""
+    from mpeg4fba.fba.stream import FapStream
+    return FapStream.from_values({}, fps=1, n_frames=2, visemes=[(10, 0, 0, 0), (10, 0, 63, 0)])
+
+
+def test_the_open_mouth_shows_the_teeth(browser, tmp_path):
+    """The mouth cavity is wound inward: drawn two-sided, its near wall would cover the
+    teeth.  Teeth painted green must show in the open mouth, and only there."""
+    from mpeg4fba.formats.gltf import dumps_glb
+    from mpeg4fba.models import reference_head
+    face = reference_head(resolution=0.5)
+    for name in ("UpperTeeth", "LowerTeeth"):
+        face.colors[name] = np.tile([0.0, 1.0, 0.0], (len(face.meshes[name].vertices), 1))
+    p = _open(browser, tmp_path, dumps_glb(face, _mouth_stream()), title="Teeth")
+    p.page.evaluate("__player.pause(); __player.setTime(0)")
+    closed = _scene_pixels(p.shot())[:, :-20]        # [:, :-20]: clear of the panel's edge
+    p.page.evaluate("__player.setTime(1)")
+    wide = _scene_pixels(p.shot())[:, :-20]
+
+    def green(img):
+        g = img[..., 1]
+        return (g > 80) & (g > 2 * img[..., 0] + 20) & (g > 2 * img[..., 2] + 20)
+    rows, cols = np.nonzero(np.abs(wide - np.array(BACKGROUND)).sum(-1) > 40)
+    r, c = np.nonzero(green(wide))
+    print(f"{len(r)} green pixels in the open mouth")
+    assert not green(closed).any()                 # behind the closed lips
+    assert len(r) > 100
+    top, bottom, left, right = rows.min(), rows.max(), cols.min(), cols.max()
+    assert ((r > (top + bottom) / 2) & (r < bottom)).all()          # the lower half of the face
+    assert ((c > left + (right - left) / 3) & (c < right - (right - left) / 3)).all()
+    assert p.errors == []
+
+
+def test_a_face_saved_as_vrml_and_read_back_plays_as_before(browser, tmp_path):
+    """Colours go through the VRML file (Material, Color nodes): the page of the face
+    read back looks like the page of the face itself."""
+    from mpeg4fba.formats.gltf import dumps_glb
+    from mpeg4fba.formats.wrl_face import load_face, save_face
+    from mpeg4fba.models import reference_head
+    face = reference_head(resolution=0.5)
+    save_face(face, tmp_path / "head.wrl")
+    shots = []
+    for k, f in enumerate((face, load_face(tmp_path / "head.wrl"))):
+        (tmp_path / str(k)).mkdir()
+        p = _open(browser, tmp_path / str(k), dumps_glb(f, _mouth_stream()), title="Head")
+        p.page.evaluate("__player.pause(); __player.setTime(1)")
+        shots.append(_scene_pixels(p.shot()))
+        assert p.errors == []
+    differ = (np.abs(shots[0] - shots[1]).sum(-1) > 12).mean()
+    print(f"{differ:.3%} of the view differs")
+    assert differ < 0.002

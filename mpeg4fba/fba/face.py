@@ -27,6 +27,7 @@ from typing import Iterable, Mapping, Optional, Sequence
 import numpy as np
 import scipy.sparse as sp
 
+from .appearance import is_closed, mesh_color
 from .fapu import FAPU
 from .fat import FAT, FaceDefTable, FaceDefMesh, interval_weights, rotation_matrices
 from .featurepoints import FeaturePointSet
@@ -39,17 +40,43 @@ __all__ = ["FaceMesh", "FaceTransform", "FaceModel", "Playback", "table_values"]
 @dataclass(eq=False)
 class FaceMesh:
     """A mesh of the face: neutral ``vertices`` [n, 3] in its own (local) coordinates,
-    ``triangles`` [m, 3], and ``parent``, the name of the Transform it hangs under
-    (None: the face's root)."""
+    ``triangles`` [m, 3], ``parent``, the name of the Transform it hangs under (None:
+    the face's root), and ``color``, its own RGB colour (0-1, as displayed: a VRML
+    Material's diffuseColor, a glTF material's base colour) or None for the one its
+    name suggests (:func:`~mpeg4fba.fba.appearance.mesh_color`).  Colours per vertex,
+    where a face has them, are in :attr:`FaceModel.colors` and take precedence.
+
+    >>> FaceMesh("Tongue", np.eye(3), [[0, 1, 2]]).display_color()
+    (0.8, 0.4, 0.42)
+    >>> FaceMesh("Tongue", np.eye(3), [[0, 1, 2]], color=(1, 0, 0)).display_color()
+    (1.0, 0.0, 0.0)
+    """
 
     name: str
     vertices: np.ndarray
     triangles: np.ndarray
     parent: Optional[str] = None
+    color: Optional[tuple] = None
 
     def __post_init__(self):
         self.vertices = np.asarray(self.vertices, dtype=np.float64).reshape(-1, 3)
         self.triangles = np.asarray(self.triangles, dtype=np.int64).reshape(-1, 3)
+        if self.color is not None:
+            c = np.asarray(self.color, dtype=np.float64).reshape(-1)
+            if c.shape != (3,) or not (np.isfinite(c) & (c >= 0) & (c <= 1)).all():
+                raise ValueError(f"mesh {self.name}: color is three numbers from 0 to 1 (RGB), "
+                                 f"not {self.color!r}")
+            self.color = tuple(float(x) for x in c)
+
+    def display_color(self) -> tuple:
+        """The mesh's colour: its own, else the one its name suggests."""
+        return self.color if self.color is not None else mesh_color(self.name)
+
+    def is_closed(self) -> bool:
+        """True when the triangles enclose a volume, consistently wound, so that back
+        faces are never meant to be seen (:func:`~mpeg4fba.fba.appearance.is_closed`):
+        such a mesh is drawn single-sided, any other two-sided."""
+        return is_closed(self.triangles)
 
 
 @dataclass(eq=False)
@@ -276,9 +303,10 @@ class FaceModel:
 
     ``fapu`` defaults to the one computed from ``points`` when those have the points it
     needs.  ``play(stream)`` evaluates a FAP stream; ``compile()`` is done once and kept.
-    Optional extras: ``colors`` (mesh name -> [n, 3] RGB per vertex, for pictures) and
-    ``regions`` (name -> vertex indices of named areas, e.g. the lips), both empty by
-    default and not stored in VRML.
+    Optional extras: ``colors`` (mesh name -> [n, 3] RGB per vertex, as displayed;
+    stored in VRML as the IndexedFaceSet's Color, in glTF as COLOR_0) and ``regions``
+    (name -> vertex indices of named areas, e.g. the lips; not stored in files), both
+    empty by default.
     """
 
     def __init__(self, meshes: Iterable[FaceMesh] = (), transforms: Iterable[FaceTransform] = (),
@@ -310,6 +338,31 @@ class FaceModel:
     @fapu.setter
     def fapu(self, value: Optional[FAPU]) -> None:
         self._fapu = value
+
+    def mesh_colors(self, mesh: str) -> tuple:
+        """``(colour, colours per vertex or None)`` of a mesh as files store them: its
+        entry of :attr:`colors` when that is an [n, 3] array (clipped to 0..1), else
+        None; and its one colour, that entry when it is one RGB colour, else
+        ``FaceMesh.display_color()``.  ValueError for an entry of another shape.
+
+        >>> face = FaceModel([FaceMesh("Tongue", np.eye(3), [[0, 1, 2]])])
+        >>> face.mesh_colors("Tongue")
+        ((0.8, 0.4, 0.42), None)
+        >>> face.colors["Tongue"] = np.full((3, 3), 0.5)
+        >>> face.mesh_colors("Tongue")[1].shape
+        (3, 3)
+        """
+        m = self.meshes[mesh]
+        given = (getattr(self, "colors", None) or {}).get(mesh)
+        if given is None:
+            return m.display_color(), None
+        a = np.asarray(given, dtype=np.float64)
+        if a.shape == (3,) and np.isfinite(a).all():
+            return tuple(float(c) for c in np.clip(a, 0.0, 1.0)), None
+        if a.shape != (len(m.vertices), 3) or not np.isfinite(a).all():
+            raise ValueError(f"face.colors[{mesh!r}] is one RGB colour or one per vertex "
+                             f"([{len(m.vertices)}, 3], finite), not an array of shape {a.shape}")
+        return m.display_color(), np.clip(a, 0.0, 1.0)
 
     # -- the transform tree -------------------------------------------------------------------
     def chain(self, transform: Optional[str]) -> list:

@@ -16,8 +16,16 @@ What is written
   no axis change.
 * **Meshes**, one node each under their Transform: POSITION (float32), smooth NORMAL
   (area-weighted, computed), uint32 triangle indices, COLOR_0 when ``face.colors``
-  has the mesh (sRGB colours turned linear), a double-sided material (VRML's
-  ``solid FALSE``), and one **morph target per FAT interval** touching the mesh.
+  has the mesh (sRGB colours turned linear), a material of its own named after it, and
+  one **morph target per FAT interval** touching the mesh.  The material's base colour
+  is the mesh's (:meth:`FaceModel.mesh_colors`: its own, else one from its name), or
+  white under COLOR_0, which then gives the colours; it is single-sided
+  (``doubleSided`` false: back faces culled) for a closed mesh
+  (:meth:`FaceMesh.is_closed`: eyeballs, teeth, tongue, the mouth cavity) and
+  double-sided for an open one (the skin, the hair).  A viewer draws both sides of a
+  double-sided mesh, so the mouth cavity, which is wound inward so that culling shows
+  its far wall, would cover the teeth and tongue with its near wall if it were
+  double-sided.
 * **Targets and weights.**  An interval ``[lo, hi]`` of a FaceDefMesh adds
   ``w(P) * d`` for FAP value P (``w`` from :func:`~mpeg4fba.fba.fat.interval_weights`).
   Its target holds the interval's *full* displacement ``s * d``, where ``s = hi - lo``
@@ -81,8 +89,6 @@ _COMPONENT = {np.dtype("<f4"): _FLOAT, np.dtype("<u4"): _UINT, np.dtype("<u2"): 
               np.dtype("<u1"): _UBYTE}
 _TYPE = {1: "SCALAR", 3: "VEC3", 4: "VEC4"}
 _F32_MAX = float(np.finfo(np.float32).max)
-#: VRML's default face colour in scene_from_face, for meshes without per-vertex colours.
-_DEFAULT_COLOR = (0.8, 0.65, 0.55)
 
 
 # -- small numeric helpers ------------------------------------------------------------------
@@ -386,23 +392,16 @@ def face_to_gltf(face: FaceModel, stream: Optional[FapStream] = None) -> "pygltf
         if t.parent is not None:
             nodes[inner[t.parent]].children.append(outer[n])
 
-    # Meshes.
-    colors = getattr(face, "colors", None) or {}
+    # Meshes, each with its own material (see the module doc).
     materials: list = []
-    material_of: dict = {}
 
-    def material(kind: str) -> int:
-        """The plain or the vertex-coloured material, made when first used (an unused
-        one is reported by validators)."""
-        if kind not in material_of:
-            base = [float(x) for x in _srgb_to_linear(_DEFAULT_COLOR)] + [1.0] \
-                if kind == "face" else None   # white base: COLOR_0 gives the colour
-            materials.append(g.Material(name=kind, doubleSided=True,   # VRML's solid FALSE
-                                        pbrMetallicRoughness=g.PbrMetallicRoughness(
-                                            baseColorFactor=base, metallicFactor=0.0,
-                                            roughnessFactor=0.7)))
-            material_of[kind] = len(materials) - 1
-        return material_of[kind]
+    def material(m, color: tuple, vertex_colors: bool) -> int:
+        base = None if vertex_colors else [float(x) for x in _srgb_to_linear(color)] + [1.0]
+        materials.append(g.Material(name=m.name, doubleSided=not m.is_closed(),
+                                    pbrMetallicRoughness=g.PbrMetallicRoughness(
+                                        baseColorFactor=base, metallicFactor=0.0,
+                                        roughnessFactor=0.7)))
+        return len(materials) - 1
 
     meshes: list = []
     mesh_node: dict = {}
@@ -418,11 +417,12 @@ def face_to_gltf(face: FaceModel, stream: Optional[FapStream] = None) -> "pygltf
             POSITION=buf.accessor(v, _ARRAY_BUFFER, bounds=True),
             NORMAL=buf.accessor(_smooth_normals(m.vertices, m.triangles).astype("<f4"),
                                 _ARRAY_BUFFER))
-        col = colors.get(name)
-        if col is not None and np.shape(col) == (len(m.vertices), 3):
-            attributes.COLOR_0 = buf.accessor(_srgb_to_linear(col).astype("<f4"), _ARRAY_BUFFER)
-        kind = "face" if attributes.COLOR_0 is None else "vertex_colors"
-        prim = g.Primitive(attributes=attributes, material=material(kind), mode=4,
+        color, per_vertex = face.mesh_colors(name)
+        if per_vertex is not None:
+            attributes.COLOR_0 = buf.accessor(_srgb_to_linear(per_vertex).astype("<f4"),
+                                              _ARRAY_BUFFER)
+        prim = g.Primitive(attributes=attributes, mode=4,
+                           material=material(m, color, per_vertex is not None),
                            indices=buf.accessor(m.triangles.astype("<u4").reshape(-1),
                                                 _ELEMENT_ARRAY_BUFFER))
         ss = slots[name]

@@ -15,7 +15,13 @@ its FDP, and turns
   other geometry, PROTO instances) are not part of the model.  A node used in several
   places gives one mesh or transform per place, the later ones named ``<name>_2``...;
   the FAT entries that target it are repeated for each.  Mesh and transform names are
-  unique together.  Texture coordinates, normals and colours are not read.
+  unique together.  A Shape's ``Material.diffuseColor`` becomes the mesh's ``color``
+  (none without a Material: the renderers then pick one from the mesh's name), and an
+  IndexedFaceSet's Color node the face's colours per vertex (``face.colors``; colours
+  per face or through a colorIndex are averaged at each vertex).  A colour outside
+  0..1, or a Color index beyond the Color node, is a FormatError at the node's
+  file:line.  ``solid`` is not read (a mesh is drawn single-sided where it is closed,
+  :meth:`FaceMesh.is_closed`); texture coordinates and normals are not read.
 * ``FDP.featurePointsCoord`` into feature points (:mod:`~mpeg4fba.formats.wrl_fdp`;
   none when the FDP has no featurePointsCoord).
 * ``FDP.faceDefTables`` into the :class:`FAT`.  A FaceDefMesh whose
@@ -47,7 +53,10 @@ says ``file:line`` for each entry: :func:`where` does it.
 
 **Writing** (:func:`scene_from_face`, :func:`save_face`) gives a Transform/Shape scene
 graph (Transforms with their neutral values, IndexedFaceSets DEF'd with the mesh
-names, coordIndex the triangles with -1 after each, a default Appearance), the Face
+names, coordIndex the triangles with -1 after each; each Shape's Material the mesh's
+colour and a Color node of the face's colours per vertex where it has them, to 4
+decimals (:meth:`FaceModel.mesh_colors`); ``solid TRUE`` for a closed mesh, whose back
+faces are never to be seen, else ``solid FALSE``), the Face
 with its FDP (featurePointsCoord, faceSceneGraph, faceDefTables) and, when the face has
 initial FAP values, a FAP node.  DEF names are the model's names when they are valid
 VRML97 names, else sanitised (bad characters become ``_``), and unique.
@@ -210,6 +219,7 @@ class _GraphReader:
         self.mesh_names: dict = {}       # id(IFS node) -> [mesh names]
         self.transform_names: dict = {}  # id(Transform node) -> [transform names]
         self.nodes: dict = {}            # id(FaceMesh / FaceTransform) -> node
+        self.colors: dict = {}           # mesh name -> [n, 3] colours per vertex
         self._serial = {"mesh": 0, "transform": 0}
         self.walk(roots)
 
@@ -260,7 +270,7 @@ class _GraphReader:
                 geometry = node["geometry"]
                 if isinstance(geometry, Node) and geometry.type == "IndexedFaceSet" \
                         and isinstance(geometry.decl, NodeType):
-                    self.mesh(geometry, parent)
+                    self.mesh(geometry, parent, node)
                 continue
             elif t == "IndexedFaceSet":
                 self.mesh(node, parent)
@@ -282,7 +292,7 @@ class _GraphReader:
         self.nodes[id(t)] = node
         return name
 
-    def mesh(self, ifs: Node, parent: Optional[str]) -> None:
+    def mesh(self, ifs: Node, parent: Optional[str], shape: Optional[Node] = None) -> None:
         name = self.claim(ifs, "mesh")
         coord = ifs["coord"]
         points = coord.get("point") if isinstance(coord, Node) else None
@@ -300,10 +310,88 @@ class _GraphReader:
         triangles, _ = fan_triangulate(idx)
         if not ifs["ccw"]:
             triangles = triangles[:, [0, 2, 1]]
-        m = FaceMesh(name, vertices, triangles, parent)
+        m = FaceMesh(name, vertices, triangles, parent, _material_color(shape, name, self.path))
+        colors = _vertex_colors(ifs, name, idx, len(vertices), m.display_color(), self.path)
+        if colors is not None:
+            self.colors[name] = colors
         self.meshes.append(m)
         self.mesh_names.setdefault(id(ifs), []).append(name)
         self.nodes[id(m)] = ifs
+
+
+def _builtin(node: Any, type_name: str) -> bool:
+    return isinstance(node, Node) and node.type == type_name and isinstance(node.decl, NodeType)
+
+
+def _check_colors(values: np.ndarray, what: str, at: Node, path: Optional[str]) -> None:
+    bad = ~(np.isfinite(values) & (values >= 0) & (values <= 1))
+    if bad.any():
+        i = int(np.flatnonzero(bad.reshape(-1))[0])
+        raise FormatError(f"{what}: {float(values.reshape(-1)[i])!r} (item {i}) is not a colour "
+                          "component; colours run from 0 to 1", **_at(at, path))
+
+
+def _material_color(shape: Optional[Node], mesh: str, path: Optional[str]) -> Optional[tuple]:
+    """A Shape's ``appearance.material.diffuseColor``, or None without a Material."""
+    if shape is None:
+        return None
+    appearance = shape["appearance"]
+    if not _builtin(appearance, "Appearance") or not _builtin(appearance["material"], "Material"):
+        return None
+    material = appearance["material"]
+    color = np.asarray(material["diffuseColor"], dtype=np.float64)
+    _check_colors(color, f"mesh {mesh!r}: Material.diffuseColor", material, path)
+    return tuple(float(c) for c in color)
+
+
+def _vertex_colors(ifs: Node, mesh: str, coord_index: np.ndarray, n: int, fill: tuple,
+                   path: Optional[str]) -> Optional[np.ndarray]:
+    """The colours [n, 3] per vertex of an IndexedFaceSet's Color node, or None without
+    one.  Per vertex through coordIndex (the usual way, and the way :func:`save_face`
+    writes them) the colours are taken as they are; per face, or through a colorIndex,
+    a vertex gets the mean of its corners' colours.  Vertices on no polygon get
+    ``fill``."""
+    node = ifs["color"]
+    if not _builtin(node, "Color"):
+        return None
+    table = np.asarray(node["color"], dtype=np.float64).reshape(-1, 3)
+    what = f"IndexedFaceSet {mesh!r}"
+    _check_colors(table, f"{what}: Color.color", node, path)
+    idx = coord_index
+    corners = np.flatnonzero(idx >= 0)                  # positions of polygon corners
+    vertex = idx[corners]
+    polygon = np.cumsum(idx == -1)[corners]             # the polygon of each corner
+    per_vertex = bool(ifs["colorPerVertex"])
+    cidx = np.asarray(ifs["colorIndex"], dtype=np.int64).reshape(-1)
+    if per_vertex and not cidx.size:
+        pick, field = vertex, "coordIndex"
+    elif per_vertex:
+        if len(cidx) < len(idx):
+            raise FormatError(f"{what}: colorIndex has {len(cidx)} entries, fewer than "
+                              f"coordIndex's {len(idx)}", **_at(ifs, path))
+        pick, field = cidx[corners], "colorIndex"
+    elif cidx.size:
+        n_polygons = int(polygon.max()) + 1 if len(polygon) else 0
+        if len(cidx) < n_polygons:
+            raise FormatError(f"{what}: colorIndex has {len(cidx)} entries for {n_polygons} "
+                              "faces (colorPerVertex FALSE)", **_at(ifs, path))
+        pick, field = cidx[polygon], "colorIndex"
+    else:
+        pick, field = polygon, "the face number (colorPerVertex FALSE)"
+    bad = np.flatnonzero((pick < 0) | (pick >= len(table)))
+    if bad.size:
+        raise FormatError(f"{what}: {field} picks colour {int(pick[bad[0]])}, but the Color "
+                          f"node has {len(table)}", **_at(ifs, path))
+    out = np.tile(np.asarray(fill, dtype=np.float64), (n, 1))
+    if per_vertex and not cidx.size:
+        used = np.unique(vertex)
+        out[used] = table[used]                         # exactly as written
+        return out
+    count = np.bincount(vertex, minlength=n)
+    for c in range(3):
+        total = np.bincount(vertex, weights=table[pick, c], minlength=n)
+        out[:, c] = np.where(count > 0, total / np.maximum(count, 1), out[:, c])
+    return out
 
 
 # -- reading --------------------------------------------------------------------------------
@@ -417,6 +505,7 @@ def face_from_scene(scene: Scene, path: Optional[str] = None, face: Optional[str
     initial, viseme, expression = _read_fap(face_node, path, nodes)
     name = face_node.name or (Path(path).name.split(".")[0] if path else "face")
     model = FaceModel(graph.meshes, graph.transforms, points, fat=fat, name=name)
+    model.colors = graph.colors
     model.initial_faps = initial
     model.initial_viseme = viseme
     model.initial_expression = expression
@@ -578,11 +667,17 @@ def scene_from_face(face: FaceModel, *, protos: bool = True) -> Scene:
                              f"0..{len(m.vertices) - 1}")
         coord_index = np.column_stack([tris, np.full(len(tris), -1)]).reshape(-1)
         coord = Node("Coordinate", point=m.vertices.copy())
+        color, per_vertex = face.mesh_colors(n)
+        # 4 decimals: well below a display's 1/255 step, and a third of the text
+        fields = {} if per_vertex is None else \
+            {"color": Node("Color", color=np.round(per_vertex, 4))}
+        # solid TRUE where back faces are never to be seen: two-sided, the inward-wound
+        # mouth cavity would hide the teeth in a VRML browser
         ifs = Node("IndexedFaceSet", name=mnames[n], coord=coord, coordIndex=coord_index,
-                   solid=False, creaseAngle=1.5)
+                   solid=m.is_closed(), creaseAngle=1.5, **fields)
         ifs_nodes[n] = ifs
         shape = Node("Shape", appearance=Node("Appearance", material=Node(
-            "Material", diffuseColor=(0.8, 0.65, 0.55))), geometry=ifs)
+            "Material", diffuseColor=color)), geometry=ifs)
         (kids[m.parent] if m.parent is not None else roots).append((i, shape))
     first = _first_meshes(face)
     for n, t in face.transforms.items():

@@ -22,10 +22,12 @@ GL can't work, ``backend="matplotlib"`` never tries it.  The environment variabl
 ``MPEG4FBA_RENDER=gl`` or ``MPEG4FBA_RENDER=matplotlib`` replaces "auto" (e.g. to get
 the software pictures to the bit, or to make a missing GL an error in CI).
 
-Colours: a colour per mesh, picked from its name (skin, eyes, teeth, tongue, hair,
-mouth...) unless ``colors`` gives one, or a colour per vertex (an ``[n, 3]`` array):
-the procedural reference head carries such arrays in ``face.colors`` for its lips,
-brows, irises and gums, and they are used when present.
+Colours: a colour per vertex (an ``[n, 3]`` array) where ``colors`` or ``face.colors``
+has one (the procedural reference head carries such arrays for its lips, brows, irises
+and gums; a VRML face keeps them as Color nodes), else a colour per mesh: one
+``colors`` gives, or the mesh's own (``FaceMesh.color``, a VRML face's Material), or
+one picked from its name (skin, eyes, teeth, tongue, hair, mouth...:
+:func:`mesh_color`).
 
 Example
 -------
@@ -50,34 +52,15 @@ from typing import Mapping, Optional, Sequence, Union
 
 import numpy as np
 
+from ..fba.appearance import mesh_color
+
 __all__ = ["render_face", "render_grid", "save_png", "mesh_color", "VIEWS", "BACKENDS"]
 
 #: Camera yaw (degrees, about the face's up axis) and pitch of each named view.
 VIEWS = {"front": (0.0, 0.0), "three-quarter": (35.0, 8.0), "profile": (90.0, 0.0)}
 
 _BACKGROUND = (0.93, 0.94, 0.96)
-# Colour of a mesh by a word in its name (first match wins).
-_NAMED_COLORS = (
-    ("pupil", (0.05, 0.05, 0.06)), ("iris", (0.27, 0.40, 0.52)), ("eye", (0.95, 0.94, 0.91)),
-    ("teeth", (0.95, 0.93, 0.86)), ("tooth", (0.95, 0.93, 0.86)), ("tongue", (0.80, 0.40, 0.42)),
-    ("mouth", (0.30, 0.07, 0.09)), ("cavity", (0.30, 0.07, 0.09)), ("lip", (0.76, 0.42, 0.42)),
-    ("hair", (0.25, 0.17, 0.11)), ("brow", (0.25, 0.17, 0.11)), ("gum", (0.80, 0.45, 0.45)),
-)
-_SKIN = (0.91, 0.74, 0.63)
 _FILL = np.array([0.35, -0.45, 0.82]) / np.linalg.norm([0.35, -0.45, 0.82])   # from below right
-
-
-def mesh_color(name: str) -> tuple:
-    """The default RGB colour (0-1) of a mesh, from a word in its name.
-
-    >>> mesh_color("LeftEyeball"), mesh_color("Skin") == mesh_color("face")
-    ((0.95, 0.94, 0.91), True)
-    """
-    low = name.lower()
-    for word, rgb in _NAMED_COLORS:
-        if word in low:
-            return rgb
-    return _SKIN
 
 
 def _pose_arrays(face, frames, frame: int) -> dict:
@@ -136,10 +119,13 @@ def render_face(face, frames=None, *, frame: int = 0, size: Sequence[int] = (480
     Playback (``frame`` picks its frame).  ``view`` is "front", "three-quarter",
     "profile" or a (yaw, pitch) pair in degrees.  ``colors`` maps mesh names to an RGB
     colour or a per-vertex ``[n, 3]`` array (default: ``face.colors`` where the face has
-    them, else a colour from the mesh's name).  The camera frames the neutral face, so
-    poses of one face line up; ``fit`` may give the box ``(lo, hi)`` to frame instead.
-    ``cull`` drops triangles facing away from the camera (meshes wound outward, as
-    VRML's ``ccw TRUE``); ``hide`` names meshes not to draw.
+    them, else the mesh's own colour or one from its name).  The camera frames the
+    neutral face, so poses of one face line up; ``fit`` may give the box ``(lo, hi)``
+    to frame instead.  ``cull`` drops triangles facing away from the camera (meshes
+    wound outward, as VRML's ``ccw TRUE``); with ``cull=False`` only closed meshes
+    (:meth:`FaceMesh.is_closed`, drawn single-sided in glTF and VRML too) are culled,
+    so a mouth cavity wound inward never hides the teeth; ``hide`` names meshes not to
+    draw.
 
     ``backend``: "gl" draws with OpenGL (:mod:`mpeg4fba.render.gl`: moderngl on a
     headless EGL context, a depth buffer, 4x multisampling; RuntimeError saying why when
@@ -268,21 +254,24 @@ def _scene(face, frames, frame: int, size: Sequence[int], view, colors: Optional
         p = proj[tri]
         area = ((p[:, 1, 0] - p[:, 0, 0]) * (p[:, 2, 1] - p[:, 0, 1])
                 - (p[:, 2, 0] - p[:, 0, 0]) * (p[:, 1, 1] - p[:, 0, 1]))
-        keep = ok & (area > 0) if cull else ok
+        # Closed meshes are single-sided everywhere (glTF, VRML): their back faces are
+        # never meant to be seen, and the inward-wound mouth cavity would cover the teeth.
+        single = cull or mesh.is_closed()
+        keep = ok & (area > 0) if single else ok
         if not keep.any():
             continue
-        col = np.asarray(palette.get(name, mesh_color(name)), dtype=float)
+        col = np.asarray(palette.get(name, mesh.display_color()), dtype=float)
         vcol = np.broadcast_to(col[:3], (len(v), 3)) if col.ndim == 1 else col[:, :3]
         if shading == "gouraud":
             vn = _vertex_normals(v, tri)
             lam = vn @ light_cam
-            lam = np.abs(lam) if not cull else np.clip(lam, 0.0, 1.0)
+            lam = np.abs(lam) if not single else np.clip(lam, 0.0, 1.0)
             fill = np.clip(vn @ _FILL, 0.0, 1.0)
             lit = vcol * (0.30 + 0.58 * lam + 0.22 * fill)[:, None]
             spec = np.clip(vn @ _half_vector(light_cam), 0, 1) ** 24 * 0.08
             corner = np.clip(lit + spec[:, None], 0, 1)[tri]      # [m, 3, 3]
         else:
-            lam = np.clip(np.abs(fn @ light_cam) if not cull else fn @ light_cam, 0, 1)
+            lam = np.clip(np.abs(fn @ light_cam) if not single else fn @ light_cam, 0, 1)
             fill = np.clip(fn @ _FILL, 0.0, 1.0)
             flat = vcol[tri].mean(axis=1) * (0.30 + 0.58 * lam + 0.22 * fill)[:, None]
             corner = np.repeat(flat[:, None, :], 3, axis=1)

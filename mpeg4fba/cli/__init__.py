@@ -89,18 +89,23 @@ def read_scene(path: str, lenient: bool = False) -> Scene:
 
 @contextlib.contextmanager
 def warnings_to_stderr() -> Iterator[None]:
-    """Show warnings raised inside the block as ``mpeg4fba: warning: <message>`` lines.
+    """Show warnings raised inside the block as ``mpeg4fba: warning: <message>`` lines,
+    one per kind (messages that differ only in numbers are summed up, with a count:
+    see :func:`mpeg4fba.cli.common.summarise_warnings`).
 
     >>> with warnings_to_stderr():
     ...     warnings.warn("careful")
     """
+    from .common import summarise_warnings
+
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         try:
             yield
         finally:
-            for w in caught:
-                click.echo(f"mpeg4fba: warning: {' '.join(str(w.message).split())}", err=True)
+            messages = [" ".join(str(w.message).split()) for w in caught]
+            for line in summarise_warnings(messages):
+                click.echo(f"mpeg4fba: warning: {line}", err=True)
 
 
 def verbose(ctx: Optional[click.Context] = None) -> bool:

@@ -30,12 +30,13 @@ from typing import Any, Callable, Iterable, Optional, Sequence, Tuple, Union
 import click
 
 __all__ = ["check_output", "check_output_folder", "same_file", "summarise_warnings",
-           "TableEntry", "show_progress", "run_steps"]
+           "TableEntry", "show_progress", "run_steps", "OUTPUT_HINT"]
 
 PathLike = Union[str, "os.PathLike[str]"]
 # An input is a path, or (path, what it is on the command line) for a clearer message.
 Input = Union[None, PathLike, Tuple[Optional[PathLike], str]]
 
+#: How click names the ``-o`` option in its messages.
 OUTPUT_HINT = "'-o' / '--output'"
 
 
@@ -74,14 +75,13 @@ def _refuse_inputs(output: str, inputs: Iterable[Input], hint: str) -> None:
 
 
 def _writable_folder(folder: str, hint: str) -> None:
-    shown = folder or "."
     folder = folder or "."
     if not os.path.exists(folder):
-        raise click.BadParameter(f"the folder {shown} does not exist", param_hint=hint)
+        raise click.BadParameter(f"the folder {folder} does not exist", param_hint=hint)
     if not os.path.isdir(folder):
-        raise click.BadParameter(f"{shown} is a file, not a folder", param_hint=hint)
+        raise click.BadParameter(f"{folder} is a file, not a folder", param_hint=hint)
     if not os.access(folder, os.W_OK | os.X_OK):
-        raise click.BadParameter(f"can't write in the folder {shown} (permission denied)",
+        raise click.BadParameter(f"can't write in the folder {folder} (permission denied)",
                                  param_hint=hint)
 
 
@@ -152,11 +152,15 @@ def _spans(values: list) -> str:
 
 def summarise_warnings(messages: Iterable[str]) -> list:
     """One line per kind of message: messages that differ only in their numbers are one
-    kind, shown once with each varying number replaced by the list of its values and a
-    count; a message of its own kind is kept as it is.  Order: first appearance.
+    kind, shown once with a count.  When one number varies (``FAP 43``, ``FAP 44``) it
+    is replaced by the list of its values; when several do (``a.wrl:3:5``,
+    ``a.wrl:10:2``: the list would mix them up) the first message stands for the rest.
+    A message of its own kind is kept as it is.  Order: first appearance.
 
     >>> summarise_warnings(["no tongue: FAP 43 not cloned", "no eyes", "no tongue: FAP 44 not cloned"])
     ['no tongue: FAP 43-44 not cloned (2 warnings like this)', 'no eyes']
+    >>> summarise_warnings(["a.wrl:3:5: odd", "a.wrl:10:2: odd", "a.wrl:12:1: odd"])
+    ['a.wrl:3:5: odd (and 2 more like this)']
     """
     kinds: dict = {}
     for message in messages:
@@ -167,12 +171,15 @@ def summarise_warnings(messages: Iterable[str]) -> list:
         if len(group) == 1:
             lines.append(group[0])
             continue
-        slots = [_NUMBER.findall(m) for m in group]
+        columns = list(zip(*(_NUMBER.findall(m) for m in group)))
+        varying = [i for i, values in enumerate(columns) if len(set(values)) > 1]
+        if len(varying) != 1:
+            lines.append(f"{group[0]} (and {len(group) - 1} more like this)")
+            continue
         pieces = _NUMBER.split(group[0])
         text = pieces[0]
         for i, piece in enumerate(pieces[1:]):
-            values = [s[i] for s in slots]
-            text += values[0] if len(set(values)) == 1 else _spans(values)
+            text += _spans(list(columns[i])) if i == varying[0] else columns[i][0]
             text += piece
         lines.append(f"{text} ({len(group)} warnings like this)")
     return lines

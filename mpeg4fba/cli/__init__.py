@@ -131,24 +131,31 @@ def read_scene(path: str, lenient: bool = False) -> Scene:
 
 @contextlib.contextmanager
 def warnings_to_stderr() -> Iterator[None]:
-    """Show warnings raised inside the block as ``mpeg4fba: warning: <message>`` lines.
+    """Show warnings raised inside the block as ``mpeg4fba: warning: <message>`` lines,
+    one per kind (messages that differ only in numbers are summed up, with a count:
+    see :func:`mpeg4fba.cli.common.summarise_warnings`).
 
     >>> with warnings_to_stderr():
     ...     warnings.warn("careful")
     """
+    from .common import summarise_warnings
+
     caught: list = []
     try:
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always")
             yield
     finally:
+        messages = []
         for w in caught:
             if issubclass(w.category, (DeprecationWarning, PendingDeprecationWarning)):
                 # a library's deprecation is for us, not the user: back to the filters
                 # outside (the command group hides it, or shows it with --verbose)
                 warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
             else:
-                click.echo(f"mpeg4fba: warning: {' '.join(str(w.message).split())}", err=True)
+                messages.append(" ".join(str(w.message).split()))
+        for line in summarise_warnings(messages):
+            click.echo(f"mpeg4fba: warning: {line}", err=True)
 
 
 def verbose(ctx: Optional[click.Context] = None) -> bool:

@@ -4,7 +4,9 @@
 of SOURCE (a face with a FAT; the built-in reference head when left out) onto TARGET (a
 face with feature points, from its FDP or from ``--target-points``) and writes the
 target with its new FAT.  The result is checked with the validator (including the
-numeric FAP check) and a summary is printed.
+numeric FAP check) and a summary is printed.  The output is checked before any work
+(not an input, a VRML or glTF name, its folder there and writable); on a terminal a
+progress bar names the steps; the cloner's warnings come one line per kind, with a count.
 
 Example
 -------
@@ -21,12 +23,12 @@ Example
 """
 from __future__ import annotations
 
-import time
 from typing import Optional
 
 import click
 
 from . import main, warnings_to_stderr
+from .common import check_output, run_steps
 
 __all__ = ["clone_command"]
 
@@ -35,7 +37,8 @@ __all__ = ["clone_command"]
                               "\n  mpeg4fba clone demy.wrl target.obj --target-points target.json -o out.wrl"
                               "\n  mpeg4fba clone source.wrl target.wrl -o out.wrl --support 0.03")
 @click.argument("faces", nargs=-1, metavar="[SOURCE] TARGET")
-@click.option("-o", "--output", metavar="OUT.wrl", required=True, help="The face to write (VRML).")
+@click.option("-o", "--output", metavar="OUT.wrl", required=True,
+              help="The face to write: VRML (.wrl, .wrz, .wrl.gz) or glTF (.glb, .gltf).")
 @click.option("--source-points", metavar="FILE", help="Feature points of SOURCE (.json sidecar or Xface .fdp).")
 @click.option("--target-points", metavar="FILE", help="Feature points of TARGET (.json sidecar or Xface .fdp).")
 @click.option("--support", type=click.FloatRange(min=0), default=0.02, show_default=True,
@@ -54,41 +57,67 @@ def clone_command(faces: tuple, output: str, source_points: Optional[str], targe
                   support: float, no_scale: bool, positions: str, triangulation: str, method: str,
                   lenient: bool, no_check: bool) -> None:
     """Clone the facial motion of SOURCE (default: the reference head) onto TARGET."""
-    from ..cloning import FacialMotionCloner
-    from ..formats.face_files import read_face
-    from ..formats.wrl_face import save_face
+    from ..formats.face_files import VRML_SUFFIXES
 
     if len(faces) not in (1, 2):
         raise click.UsageError(f"give [SOURCE] TARGET (got {len(faces)} files)")
     if len(faces) == 1 and source_points:
         raise click.UsageError("--source-points needs a SOURCE file")
-    with warnings_to_stderr():
+    # before the 10-20 seconds of work: a bad output is found now, not at the end
+    check_output(output, [(faces[0], "SOURCE") if len(faces) == 2 else None,
+                          (faces[-1], "TARGET"), (source_points, "--source-points"),
+                          (target_points, "--target-points")],
+                 suffixes=VRML_SUFFIXES + (".glb", ".gltf"), what="a face")
+    state: dict = {}
+    times: dict = {}
+
+    def read() -> None:
+        from ..formats.face_files import read_face
         if len(faces) == 2:
-            source = read_face(faces[0], source_points, lenient=lenient)
+            state["source"] = read_face(faces[0], source_points, lenient=lenient)
         else:
             from ..models import reference_head
-            source = reference_head()
-        target = read_face(faces[-1], target_points, lenient=lenient)
-        if not len(source.fat):
-            raise click.ClickException(f"the source face {source.name} has no FAT: nothing to clone")
-        t0 = time.perf_counter()
+            state["source"] = reference_head()
+        state["target"] = read_face(faces[-1], target_points, lenient=lenient)
+        if not len(state["source"].fat):
+            raise click.ClickException(f"the source face {state['source'].name} has no FAT: "
+                                       "nothing to clone")
+
+    def mapping() -> None:
+        source, target = state["source"], state["target"]
         if method == "local-frames":
             from ..cloning import LocalFrameCloner
-            cloner = LocalFrameCloner(source, target, scale=not no_scale)
+            state["cloner"] = LocalFrameCloner(source, target, scale=not no_scale)
         else:
-            cloner = FacialMotionCloner(source, target, support=support, scale_motion=not no_scale,
-                                        positions=positions, triangulation=triangulation)
-        t1 = time.perf_counter()
-        result = cloner.clone()
-        t2 = time.perf_counter()
-        save_face(result, output)
+            from ..cloning import FacialMotionCloner
+            state["cloner"] = FacialMotionCloner(source, target, support=support,
+                                                 scale_motion=not no_scale, positions=positions,
+                                                 triangulation=triangulation)
+
+    def tables() -> None:
+        state["result"] = state["cloner"].clone()
+
+    def check() -> None:
+        from ..formats.validate import validate
+        state["report"] = validate(state["result"])
+
+    def write() -> None:
+        from ..formats.wrl_face import save_face
+        save_face(state["result"], output)
+
+    steps = [("reading the faces", read), ("mapping the faces", mapping),
+             ("cloning the tables", tables)]
+    steps += [] if no_check else [("checking the result", check)]
+    steps.append(("writing", write))
+    with warnings_to_stderr():
+        run_steps(steps, "mpeg4fba clone", times)
+    source, target, result = state["source"], state["target"], state["result"]
     fat = result.fat
     click.echo(f"cloned {source.name} onto {target.name}: {len(fat.faps)} FAPs, "
                f"{len(fat.visemes)} visemes, {len(fat.expressions)} expressions "
-               f"(mapping {t1 - t0:.2f} s, tables {t2 - t1:.2f} s); wrote {output}")
+               f"(mapping {times['mapping the faces']:.2f} s, tables {times['cloning the tables']:.2f} s); wrote {output}")
     if not no_check:
-        from ..formats.validate import validate
-        report = validate(result)
+        report = state["report"]
         errors = [f for f in report.findings if f.severity == "error"]
         worst = [f for f in report.findings if f.severity != "info"]
         click.echo(f"check: {len(errors)} errors, {len(worst) - len(errors)} warnings")

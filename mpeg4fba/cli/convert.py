@@ -1,7 +1,9 @@
 """``mpeg4fba convert``: read a VRML97 file and write it back in canonical form.
 
 The output is gzip-compressed when its name ends in ``.gz`` or ``.wrz``, and is
-written through a temporary file, so a failure leaves no half-written file.
+written through a temporary file, so a failure leaves no half-written file.  It must
+be a VRML name (``.wrl``, ``.wrz``, ``.wrl.gz``, ``.gz``, ``.vrml``) in a folder that
+exists, and not the input (in-place rewriting is refused: write elsewhere, then rename).
 
 With ``--morph-targets`` it builds a FAT-bearing face from a morph-target set instead:
 ``mpeg4fba convert --morph-targets NEUTRAL TARGET... -o OUT.wrl [--mapping FILE]``
@@ -33,6 +35,10 @@ import click
 
 from ..vrml import dump
 from . import main, read_scene, warnings_to_stderr
+from .common import OUTPUT_HINT, check_output
+
+#: What plain ``convert`` writes (VRML97, gzipped for .gz / .wrz).
+VRML_OUT = (".wrl", ".wrz", ".wrl.gz", ".gz", ".vrml")
 
 __all__ = ["convert"]
 
@@ -60,16 +66,22 @@ def convert(files: tuple, output: Optional[str], morph_targets: bool, mapping: O
             raise click.UsageError("--morph-targets needs the neutral face and its targets")
         if output is None:
             raise click.UsageError("--morph-targets needs -o OUT.wrl")
+        check_output(output, [(files[0], "NEUTRAL")] + [(t, "TARGET") for t in files[1:]]
+                     + [(mapping, "--mapping")],
+                     suffixes=VRML_OUT + (".glb", ".gltf"), what="a face")
         _convert_morph_targets(files[0], files[1:], output, mapping, lenient)
         return
     if mapping is not None:
         raise click.UsageError("--mapping goes with --morph-targets")
+    hint = OUTPUT_HINT if output is not None else "OUT.wrl"
     if output is not None:
         files = files + (output,)
     if len(files) != 2:
         raise click.UsageError(f"give IN.wrl and OUT.wrl (got {len(files)} file"
                                f"{'' if len(files) == 1 else 's'})")
     source, target = files
+    # rewriting IN in place would lose its comments and layout for good: refused
+    check_output(target, [(source, "IN")], suffixes=VRML_OUT, what="VRML97", hint=hint)
     scene = read_scene(source, lenient)
     dump(scene, target)
     n_nodes = sum(1 for _ in scene)

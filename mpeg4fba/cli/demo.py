@@ -33,6 +33,7 @@ from pathlib import Path
 import click
 
 from . import main
+from .common import check_output_folder
 
 __all__ = ["demo"]
 
@@ -60,6 +61,7 @@ def demo(out_dir: str, quick: bool) -> None:
     from ..models.phrase import PHRASE_TEXT, demo_stream
     from ..render.player import write_player
 
+    check_output_folder(out_dir, hint="OUT_DIR")  # before the work, not after it
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     res = (0.5, 0.6) if quick else (1.0, 0.8)

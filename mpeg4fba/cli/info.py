@@ -2,7 +2,9 @@
 
 For a VRML file: node counts, PROTOs, ROUTEs, DEFs, meshes.  For a ``.fap`` animation
 (chosen by the extension, case-insensitive): frames, fps, duration, version, name, the
-animated FAPs and the min/max of each.
+animated FAPs and the min/max of each.  For a face in a mesh file (``.glb``, ``.gltf``,
+``.obj``, as ``play`` and ``demo`` write them): its meshes, Transforms, feature points,
+FAT and bounding box, as :func:`mpeg4fba.formats.face_files.read_face` reads it.
 
 Example
 -------
@@ -21,11 +23,12 @@ from typing import Any, Optional
 import click
 
 from ..fba.stream import FapStream
+from ..formats.face_files import MESH_SUFFIXES
 from ..vrml import ExternProto, Node, Proto, Scene
 from ..vrml.walk import Mesh, iter_meshes
 from . import main, read_scene, warnings_to_stderr
 
-__all__ = ["info", "scene_info", "fap_info"]
+__all__ = ["info", "scene_info", "fap_info", "face_info"]
 
 
 def _label(node: Node) -> str:
@@ -164,15 +167,65 @@ def _is_fap(path: str) -> bool:
     return path.lower().endswith(".fap")
 
 
+def face_info(face: Any, path: Optional[str] = None) -> dict:
+    """The facts ``info`` reports about a face model (read from a mesh file), as plain
+    JSON-ready values; positions are in the face frame (Transforms applied).
+
+    >>> from mpeg4fba.fba.face import FaceMesh, FaceModel
+    >>> facts = face_info(FaceModel([FaceMesh("Tri", [[0, 0, 0], [1, 0, 0], [0, 2, 0]], [[0, 1, 2]])]))
+    >>> facts["meshes"][0]["triangles"], facts["bounds"]["max"], facts["fat"]["faps"]
+    (1, [1.0, 2.0, 0.0], 0)
+    """
+    meshes = []
+    lows, highs = [], []
+    for name, m in face.meshes.items():
+        world = face.world_vertices(name)
+        bounds = None
+        if len(world):
+            bounds = [world.min(axis=0).tolist(), world.max(axis=0).tolist()]
+            lows.append(bounds[0])
+            highs.append(bounds[1])
+        meshes.append({"name": name, "parent": m.parent, "vertices": int(len(m.vertices)),
+                       "triangles": int(len(m.triangles)), "bounds": bounds})
+    bounds = None
+    if lows:
+        bounds = {"min": [min(v) for v in zip(*lows)], "max": [max(v) for v in zip(*highs)]}
+    fat = face.fat
+    return {"file": path, "kind": "face", "name": face.name, "meshes": meshes,
+            "transforms": list(face.transforms), "feature_points": len(face.points),
+            "fat": {"tables": len(fat), "faps": len(fat.faps), "visemes": len(fat.visemes),
+                    "expressions": len(fat.expressions)},
+            "bounds": bounds}
+
+
+def _face_text(facts: dict) -> str:
+    fat = facts["fat"]
+    lines = [f"file: {facts['file'] or '<face>'}",
+             f"face: {facts['name']}",
+             f"meshes: {len(facts['meshes'])}"]
+    for m in facts["meshes"]:
+        under = f"  under {m['parent']}" if m["parent"] else ""
+        lines.append(f"  {m['name']}: {m['vertices']} vertices, {m['triangles']} triangles{under}")
+    lines.append("Transforms: " + (", ".join(facts["transforms"]) or "none"))
+    lines.append(f"feature points: {facts['feature_points']}"
+                 + ("" if facts["feature_points"] else " (the file holds none)"))
+    lines.append(f"FAT: {fat['tables']} tables: {fat['faps']} FAPs, {fat['visemes']} visemes, "
+                 f"{fat['expressions']} expressions")
+    b = facts["bounds"]
+    lines.append("bounds: " + ("none" if b is None else f"{_xyz(b['min'])} to {_xyz(b['max'])}"))
+    return "\n".join(lines)
+
+
 @main.command(epilog="\b\nExamples:\n  mpeg4fba info face.wrl\n  mpeg4fba info --json face.wrl.gz"
-                     "\n  mpeg4fba info joy.fap\n  mpeg4fba info --example")
-@click.argument("file", required=False, metavar="[FILE.wrl|FILE.fap]")
+                     "\n  mpeg4fba info joy.fap\n  mpeg4fba info talk.glb\n  mpeg4fba info --example")
+@click.argument("file", required=False, metavar="[FILE.wrl|FILE.fap|FILE.glb]")
 @click.option("--json", "as_json", is_flag=True, help="Print the facts as JSON.")
 @click.option("--lenient", is_flag=True, help="Keep nodes and fields that are not VRML97 (warns).")
 @click.option("--example", is_flag=True, help="Describe the built-in example scene instead of FILE.")
 def info(file: Optional[str], as_json: bool, lenient: bool, example: bool) -> None:
     """Node counts, PROTOs, ROUTEs, DEFs, meshes and bounding box of a VRML97 file;
-    frames, fps, duration and per-FAP min/max of a .fap animation."""
+    frames, fps, duration and per-FAP min/max of a .fap animation; meshes, FAT and
+    bounding box of a face in a .glb, .gltf or .obj file."""
     if example == (file is not None):
         raise click.UsageError("give either FILE or --example")
     if file is not None and _is_fap(file):
@@ -180,6 +233,12 @@ def info(file: Optional[str], as_json: bool, lenient: bool, example: bool) -> No
         with warnings_to_stderr():
             facts = fap_info(read_fap(file), file)
         click.echo(json.dumps(facts, indent=2) if as_json else _fap_text(facts))
+        return
+    if file is not None and file.lower().endswith(MESH_SUFFIXES):
+        from ..formats.face_files import read_face
+        with warnings_to_stderr():
+            facts = face_info(read_face(file, lenient=lenient), file)
+        click.echo(json.dumps(facts, indent=2) if as_json else _face_text(facts))
         return
     if example:
         from ..vrml.examples import example_scene

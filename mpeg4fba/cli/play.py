@@ -5,8 +5,12 @@
 * ``OUT.wrl`` / ``OUT.wrl.gz``: VRML97 with TimeSensor, Coordinate/Orientation/Position
   interpolators and ROUTEs, for any VRML97 browser;
 * ``OUT.html``: the self-contained HTML player (three.js inside, works from file://);
-* ``OUT/`` (a name without one of those extensions, or ending in ``/``): a folder of PNG
-  frames, ``frame_0000.png``...
+* ``OUT/`` (a name without an extension, one ending in ``/``, or an existing folder): a
+  folder of PNG frames, ``frame_0000.png``...; another extension (``talk.mp4``) is
+  refused rather than taken for a folder.
+
+The output is checked before any work: not one of the inputs (also through links), its
+folder there and writable.
 
 FACE is a VRML face (or the reference head with ``--example``); STREAM a ``.fap`` file
 (or the demo phrase with ``--demo-stream``).
@@ -32,6 +36,7 @@ from typing import Optional
 import click
 
 from . import main, warnings_to_stderr
+from .common import check_output, check_output_folder
 
 __all__ = ["play", "load_face_arg", "load_stream_arg", "parse_size"]
 
@@ -107,10 +112,19 @@ def play(files: tuple, output: str, example: bool, demo_stream: bool, frames: Op
     stream_path = None if demo_stream else (files.pop(0) if files else None)
     if files:
         raise click.UsageError(f"unexpected argument {files[0]!r}")
+    low = output.lower()
+    inputs = [(face_path, "FACE"), (stream_path, "STREAM")]
+    folder = not os.path.splitext(output)[1] or output.endswith(("/", os.sep)) \
+        or os.path.isdir(output)
+    if folder:
+        check_output_folder(output, inputs)
+    else:  # "talk.mp4" is more likely a mistake than the name of a folder of frames
+        check_output(output, inputs, suffixes=_GLTF + _VRML + (".html",), what="an animation",
+                     note=" (or PNG frames into a folder: a name without an extension, or "
+                          "ending in /)")
     with warnings_to_stderr():
         face = load_face_arg(face_path, example)
         stream = load_stream_arg(stream_path, demo_stream)
-        low = output.lower()
         if low.endswith(_GLTF):
             from ..formats.gltf import write_glb
             write_glb(face, output, stream)

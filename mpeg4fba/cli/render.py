@@ -1,7 +1,8 @@
 """``mpeg4fba render``: pictures of faces.
 
-* ``mpeg4fba render FACE -o face.png [--fap open_jaw=600 ...] [--viseme N] [--expression N]``:
-  one picture, neutral or posed;
+* ``mpeg4fba render FACE -o face.png [--fap open_jaw=600 ...] [--viseme aa] [--expression joy]``:
+  one picture, neutral or posed (visemes and expressions by number or name; ``-o``
+  ending in ``.png``, ``.jpg`` or ``.jpeg`` says the format);
 * ``--turntable N``: N pictures round the face (yaw 0 to 360), tiled into one image;
 * ``--grid FACE2 [FACE3...]``: a cloning grid (rows: sources, columns: targets, each
   face cloned onto each other; the faces need FATs or get them by cloning from the
@@ -13,7 +14,7 @@ Example
 >>> from click.testing import CliRunner
 >>> from mpeg4fba.cli import main
 >>> out = os.path.join(tempfile.mkdtemp(), "joy.png")
->>> r = CliRunner().invoke(main, ["render", "--example", "--expression", "1", "--size", "120x140",
+>>> r = CliRunner().invoke(main, ["render", "--example", "--expression", "joy", "--size", "120x140",
 ...                               "-o", out])
 >>> r.exit_code, os.path.getsize(out) > 0
 (0, True)
@@ -24,7 +25,9 @@ from typing import Optional
 
 import click
 
+from ..fba.tables import EXPRESSIONS, VISEMES
 from . import main, warnings_to_stderr
+from .common import TableEntry, check_output
 from .play import load_face_arg, parse_size
 
 __all__ = ["render"]
@@ -41,9 +44,13 @@ def _pose(faps: tuple, viseme: Optional[int], expression: Optional[int]) -> dict
                                      param_hint="--fap")
         try:
             number = FAP[int(name)].number if name.strip().isdigit() else FAP[name.strip()].number
+        except KeyError as e:  # its message names the nearest FAPs
+            raise click.BadParameter(f"{item!r}: {e.args[0]}", param_hint="--fap") from None
+        try:
             values[number] = float(value)
-        except (KeyError, ValueError) as e:
-            raise click.BadParameter(f"{item!r}: {e}", param_hint="--fap") from None
+        except ValueError:
+            raise click.BadParameter(f"{item!r}: {value.strip()!r} is not a number",
+                                     param_hint="--fap") from None
     pose = {"faps": values}
     if viseme is not None:
         pose["visemes"] = (viseme, 0, 63, 0)
@@ -53,16 +60,21 @@ def _pose(faps: tuple, viseme: Optional[int], expression: Optional[int]) -> dict
 
 
 @main.command(epilog="\b\nExamples:\n  mpeg4fba render face.wrl -o face.png"
-                     "\n  mpeg4fba render face.wrl --fap open_jaw=800 --expression 1 -o joy.png"
-                     "\n  mpeg4fba render face.wrl --turntable 8 -o turntable.png"
-                     "\n  mpeg4fba render --example --grid other.wrl --viseme 12 -o grid.png")
+                     "\n  mpeg4fba render face.wrl --fap open_jaw=800 --expression joy -o joy.png"
+                     "\n  mpeg4fba render face.wrl --turntable 8 -o turntable.jpg"
+                     "\n  mpeg4fba render --example --grid other.wrl --viseme ih -o grid.png")
 @click.argument("face", required=False)
-@click.option("-o", "--output", required=True, metavar="OUT.png", help="The PNG to write.")
+@click.option("-o", "--output", required=True, metavar="OUT.png",
+              help="The picture to write: .png, or .jpg / .jpeg for JPEG.")
 @click.option("--example", is_flag=True, help="Render the reference head instead of FACE.")
 @click.option("--fap", "faps", multiple=True, metavar="NAME=VALUE",
               help="A low-level FAP value (name or number); repeatable.")
-@click.option("--viseme", type=click.IntRange(0, 14), help="A viseme (1-14) at full strength.")
-@click.option("--expression", type=click.IntRange(0, 6), help="An expression (1-6) at full intensity.")
+@click.option("--viseme", type=TableEntry(VISEMES),
+              help="A viseme at full strength: 1-14 or its name ("
+                   + ", ".join(v.name for v in VISEMES if v.number) + ").")
+@click.option("--expression", type=TableEntry(EXPRESSIONS),
+              help="An expression at full intensity: 1-6 or its name ("
+                   + ", ".join(e.name for e in EXPRESSIONS if e.number) + ").")
 @click.option("--view", default="front", show_default=True,
               type=click.Choice(["front", "three-quarter", "profile"]))
 @click.option("--size", default="480x560", show_default=True, metavar="WxH")
@@ -73,11 +85,13 @@ def _pose(faps: tuple, viseme: Optional[int], expression: Optional[int]) -> dict
 def render(face: Optional[str], output: str, example: bool, faps: tuple, viseme: Optional[int],
            expression: Optional[int], view: str, size: str, turntable: Optional[int],
            grid: tuple) -> None:
-    """Render FACE (neutral or posed) to a PNG: one view, a turntable or a cloning grid."""
-    from ..render.preview import render_face, render_grid, save_png
+    """Render FACE (neutral or posed) to a PNG or JPEG: one view, a turntable or a cloning grid."""
+    from ..render.preview import IMAGE_SUFFIXES, render_face, render_grid, save_image
 
     w, h = parse_size(size)
     pose = _pose(faps, viseme, expression)
+    check_output(output, [(face, "FACE")] + [(g, "--grid") for g in grid],
+                 suffixes=IMAGE_SUFFIXES, what="a picture")
     with warnings_to_stderr():
         subject = load_face_arg(face, example)
         if grid:
@@ -91,7 +105,7 @@ def render(face: Optional[str], output: str, example: bool, faps: tuple, viseme:
         else:
             frames = subject.pose(pose["faps"], pose.get("visemes"), pose.get("expressions"))
             image = render_face(subject, frames, size=(w, h), view=view)
-        save_png(output, image)
+        save_image(output, image)
     click.echo(f"wrote {output} ({image.shape[1]}x{image.shape[0]})")
 
 

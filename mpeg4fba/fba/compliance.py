@@ -59,6 +59,8 @@ RULES = {r.code: r for r in [
     Rule("FBA014", "warning", "FAP moves its feature point off the standard's measure"),
     Rule("FBA015", "error", "not a face: no Face node"),
     Rule("FBA016", "warning", "FAP with a table that moves nothing at the test value"),
+    Rule("FBA017", "warning", "face in a mesh file (glTF, OBJ) without feature points: the "
+                              "feature point, FAPU and numeric FAP checks skipped"),
     Rule("FBA100", "error", "face file can't be read"),
     Rule("FBA101", "error", "FAP stream file can't be read"),
     Rule("FBA102", "warning", "FAP stream value outside the standard's range"),

@@ -139,9 +139,21 @@ class _Table:
                 self._by_name.setdefault(name.lower(), r)
 
     def _miss(self, item) -> KeyError:
+        """KeyError with the nearest names: the same words in another order first
+        (``jaw_open`` -> ``open_jaw``, which difflib alone ranks too far), then difflib's.
+
+        >>> try:
+        ...     FAP["jaw_open"]
+        ... except KeyError as e:
+        ...     print(e.args[0])
+        no FAP 'jaw_open'; did you mean open_jaw?
+        """
+        word = str(item).strip().lower()
         names = [str(k) for k in self._by_key] + list(self._by_name)
-        close = difflib.get_close_matches(str(item).lower(), names, n=3)
-        hint = f"; did you mean {', '.join(close)}?" if close else ""
+        words = sorted(word.replace("-", "_").split("_"))
+        close = [n for n in self._by_name if sorted(n.split("_")) == words]
+        close += [n for n in difflib.get_close_matches(word, names, n=3) if n not in close]
+        hint = f"; did you mean {', '.join(close[:3])}?" if close else ""
         return KeyError(f"no {self.what} {item!r}{hint}")
 
     def __getitem__(self, item):

@@ -8,7 +8,7 @@ Example
 >>> isinstance(e, ValueError), e.line, e.message
 (True, 12, "<fapu> attribute ES0: 'abc' is not a number")
 >>> str(FormatError("not a feature point file"))
-'<string>: not a feature point file'
+'not a feature point file'
 """
 from __future__ import annotations
 
@@ -23,5 +23,6 @@ class FormatError(LocatedError):
     ``path`` is the file (None for text given directly), ``line`` (1-based) where the
     problem is when that is known, ``column`` likewise (rarely known), and
     ``message`` what is wrong.  ``str(error)`` reads ``path:line: message``
-    (``path:line:column: message`` when the column is known).
+    (``path:line:column: message`` when the column is known; without a path, just
+    ``line 3: message`` or the message).
     """

@@ -48,12 +48,12 @@ def read_points(path: PathLike, face: FaceModel) -> tuple:
             only = next(iter(face.meshes))
             points = FeaturePointSet({}, {k: (only, v) for k, (_, v) in points.vertices.items()})
     else:
-        raise FormatError(f"{p}: feature points come in a .json sidecar or an Xface .fdp file")
+        raise FormatError("feature points come in a .json sidecar or an Xface .fdp file", p)
     world = {name: face.world_vertices(name) for name in face.meshes}
     try:
         points = points.resolve(world)
     except ValueError as e:
-        raise FormatError(f"{p}: {e}") from None
+        raise FormatError(str(e), p) from None
     return points, fapu
 
 
@@ -72,8 +72,8 @@ def read_face(path: PathLike, points: Optional[PathLike] = None, *, lenient: boo
         from .wrl_face import load_face
         face = load_face(p, strict=not lenient, max_inflated=max_inflated, max_ratio=max_ratio)
     else:
-        raise FormatError(f"{p}: a face is read from VRML ({', '.join(VRML_SUFFIXES)}) or a "
-                          f"mesh file ({', '.join(MESH_SUFFIXES)})")
+        raise FormatError(f"a face is read from VRML ({', '.join(VRML_SUFFIXES)}) or a "
+                          f"mesh file ({', '.join(MESH_SUFFIXES)})", p)
     if points is not None:
         pts, fapu = read_points(points, face)
         face.points = pts

@@ -132,7 +132,7 @@ def loads_feature_points_json(text: Union[str, bytes], path: Optional[str] = Non
     ...     ' "points": {"3.5": {"position": [1, 2]}}}')
     Traceback (most recent call last):
     ...
-    mpeg4fba.formats.errors.FormatError: <string>: points["3.5"].position: expected 3 numbers, not [1, 2]
+    mpeg4fba.formats.errors.FormatError: points["3.5"].position: expected 3 numbers, not [1, 2]
     """
     try:
         doc = json.loads(text, object_pairs_hook=_Object)

@@ -6,8 +6,11 @@ FaceDefTransform targets that are not an IndexedFaceSet / Transform of the face 
 graph, fieldId not 1-3), and, when those pass, the rules on the face model the FAT
 codec reads from it (:func:`mpeg4fba.fba.compliance.check_fat`: fapIDs, selects,
 borders, counts, indices, duplicate tables, feature points, FAPU) and the numeric FAP
-check.  A ``.fap`` file is read and its counts and ranges checked.  A FaceModel or a
-FapStream is checked as an object.
+check.  A ``.fap`` file is read and its counts and ranges checked.  A face in a mesh
+file (``.glb``, ``.gltf``, ``.obj``: what ``play`` and ``demo`` write) is read as
+:func:`~mpeg4fba.formats.face_files.read_face` reads it and its FAT checked; such a file
+holds no feature points, so the rules that need them (FBA002, FBA003, the numeric check)
+give way to one warning, FBA017.  A FaceModel or a FapStream is checked as an object.
 
 Example
 -------
@@ -31,6 +34,7 @@ from ..fba.tables import FAP
 from ..vrml import Scene, VRMLError, load
 from ..vrml.scene import Node, iter_nodes
 from .errors import FormatError
+from .face_files import MESH_SUFFIXES, read_face
 
 __all__ = ["validate", "MAX_RANGE_FINDINGS"]
 
@@ -40,7 +44,8 @@ MAX_RANGE_FINDINGS = 20
 
 def validate(target: Union[str, os.PathLike, Scene, FaceModel, FapStream], *,
              tolerance: float = 0.05, strict: bool = True) -> Report:
-    """Check a file (``.wrl``/``.wrl.gz`` face, ``.fap`` stream) or an object.
+    """Check a file (``.wrl``/``.wrl.gz`` face, ``.fap`` stream, ``.glb``/``.gltf``/``.obj``
+    face) or an object.
 
     ``tolerance`` is the relative error the numeric FAP check allows (5%); ``strict``
     is the VRML reader's mode.  Never raises for a bad file: what is wrong is a finding.
@@ -54,6 +59,8 @@ def validate(target: Union[str, os.PathLike, Scene, FaceModel, FapStream], *,
     path = os.fspath(target)
     if path.lower().endswith(".fap"):
         return _check_fap_file(path)
+    if path.lower().endswith(MESH_SUFFIXES):
+        return _check_mesh_file(path, tolerance, strict)
     report = Report(path)
     try:
         with warnings.catch_warnings():
@@ -150,6 +157,36 @@ def _check_face(face: FaceModel, source: str, tolerance: float) -> Report:
         findings, ratios = check_fap_ratios(face, tolerance)
         report.findings.extend(findings)
         report.ratios = ratios
+    return report
+
+
+def _check_mesh_file(path: str, tolerance: float, strict: bool) -> Report:
+    report = Report(path)
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            face = read_face(path, lenient=not strict)
+    except FormatError as e:
+        report.findings.append(Finding("FBA100", e.message, e.path or path, e.line, e.column))
+        return report
+    except OSError as e:
+        report.findings.append(Finding("FBA100", f"can't read the file: {e.strerror or e}", path))
+        return report
+    except ValueError as e:
+        report.findings.append(Finding("FBA100", str(e), path))
+        return report
+    if len(face.points) or not len(face.fat):
+        sub = _check_face(face, path, tolerance)
+    else:  # the format has no place for them: not the face's fault, but say what went unchecked
+        sub = Report(path, [f for f in check_fat(face) if f.code not in ("FBA002", "FBA003")])
+        kind = "an OBJ" if path.lower().endswith(".obj") else "a glTF"
+        sub.findings.append(Finding("FBA017", f"{kind} file holds no feature points (no FDP): "
+                                    "the checks that need them (feature points, FAPU, the "
+                                    "numeric FAP check) were skipped", path))
+    for f in sub.findings:
+        f.path = f.path or path
+    report.findings = sub.findings
+    report.ratios = sub.ratios
     return report
 
 

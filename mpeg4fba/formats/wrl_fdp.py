@@ -66,7 +66,7 @@ def feature_points_from_fdp(fdp_node: Node, path: Optional[str] = None) -> Featu
     >>> feature_points_from_fdp(Node("FDP", featurePointsCoord=Node("Coordinate", point=[(0, 0, 0)])))
     Traceback (most recent call last):
     ...
-    mpeg4fba.formats.errors.FormatError: <string>: FDP.featurePointsCoord: the Coordinate has 1 point; it must hold the 84 feature points in the standard's order (x below -9999 for an undefined one)
+    mpeg4fba.formats.errors.FormatError: FDP.featurePointsCoord: the Coordinate has 1 point; it must hold the 84 feature points in the standard's order (x below -9999 for an undefined one)
     """
     if fdp_node.type != "FDP":
         raise FormatError(f"{_describe(fdp_node)} is not an FDP node", **_where(fdp_node, path))

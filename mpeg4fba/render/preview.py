@@ -44,17 +44,19 @@ True
 """
 from __future__ import annotations
 
+import io
 import os
-import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Mapping, Optional, Sequence, Union
 
 import numpy as np
 
+from .._atomic import atomic_write
 from ..fba.appearance import mesh_color
 
-__all__ = ["render_face", "render_grid", "save_png", "mesh_color", "VIEWS", "BACKENDS"]
+__all__ = ["render_face", "render_grid", "save_png", "save_image", "IMAGE_SUFFIXES", "mesh_color",
+           "VIEWS", "BACKENDS"]
 
 #: Camera yaw (degrees, about the face's up axis) and pitch of each named view.
 VIEWS = {"front": (0.0, 0.0), "three-quarter": (35.0, 8.0), "profile": (90.0, 0.0)}
@@ -386,10 +388,36 @@ def render_grid(images: Sequence[np.ndarray], labels: Optional[Sequence[str]] = 
     return np.asarray(canvas.buffer_rgba())[:, :, :3].copy()
 
 
-def _umask() -> int:
-    mask = os.umask(0)
-    os.umask(mask)
-    return mask
+#: The picture files :func:`save_image` writes, by the name's ending (case-insensitive).
+IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg")
+
+
+def _checked(image: np.ndarray) -> np.ndarray:
+    image = np.asarray(image)
+    if image.ndim != 3 or image.shape[2] not in (3, 4):
+        raise ValueError(f"an image is [h, w, 3] or [h, w, 4], not {image.shape}")
+    return image
+
+
+def _png_bytes(image: np.ndarray) -> bytes:
+    from matplotlib import image as mimage
+
+    buffer = io.BytesIO()
+    mimage.imsave(buffer, image, format="png")
+    return buffer.getvalue()
+
+
+def _jpeg_bytes(image: np.ndarray, quality: int) -> bytes:
+    from PIL import Image
+
+    if image.dtype != np.uint8:
+        image = np.clip(np.asarray(image, float) * 255 + 0.5, 0, 255).astype(np.uint8)
+    if image.shape[2] == 4:  # JPEG has no alpha: lay the picture on white
+        a = image[:, :, 3:].astype(float) / 255
+        image = np.round(image[:, :, :3] * a + 255 * (1 - a)).astype(np.uint8)
+    buffer = io.BytesIO()
+    Image.fromarray(np.ascontiguousarray(image)).save(buffer, format="JPEG", quality=quality)
+    return buffer.getvalue()
 
 
 def save_png(path: Union[str, os.PathLike], image: np.ndarray) -> Path:
@@ -402,21 +430,31 @@ def save_png(path: Union[str, os.PathLike], image: np.ndarray) -> Path:
     ...     p.read_bytes()[:4]
     b'\\x89PNG'
     """
-    from matplotlib import image as mimage
-
     path = Path(path)
-    image = np.asarray(image)
-    if image.ndim != 3 or image.shape[2] not in (3, 4):
-        raise ValueError(f"an image is [h, w, 3] or [h, w, 4], not {image.shape}")
+    data = _png_bytes(_checked(image))
     path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    try:
-        with os.fdopen(fd, "wb") as f:
-            mimage.imsave(f, image, format="png")
-        os.chmod(tmp, 0o666 & ~_umask())              # as an ordinary new file would be
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
+    atomic_write(path, data)
+    return path
+
+
+def save_image(path: Union[str, os.PathLike], image: np.ndarray, *, quality: int = 92) -> Path:
+    """Write an RGB(A) uint8 image as PNG (``.png``) or JPEG (``.jpg``, ``.jpeg``; any
+    alpha laid on white), by the name's ending, atomically; return the path.  ValueError
+    for another ending: never one format's bytes under another's name.
+
+    >>> import tempfile, os
+    >>> with tempfile.TemporaryDirectory() as d:
+    ...     p = save_image(os.path.join(d, "x.JPG"), np.zeros((4, 5, 3), np.uint8))
+    ...     p.read_bytes()[:3]
+    b'\\xff\\xd8\\xff'
+    """
+    path = Path(path)
+    low = path.name.lower()
+    if not low.endswith(IMAGE_SUFFIXES):
+        raise ValueError(f"{os.fspath(path)}: a picture is written as "
+                         f"{', '.join(IMAGE_SUFFIXES)} (the name's ending says which)")
+    image = _checked(image)
+    data = _png_bytes(image) if low.endswith(".png") else _jpeg_bytes(image, quality)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    atomic_write(path, data)
     return path

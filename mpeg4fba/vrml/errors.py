@@ -20,7 +20,8 @@ from .._location import where_text
 class LocatedError(ValueError):
     """An error in some text that says where: ``path``, ``line``, ``column`` (1-based;
     each None when unknown) and ``message``; ``str(error)`` reads
-    ``path:line:column: message``.  The base of the errors of every reader.
+    ``path:line:column: message`` (``line 2, column 5: message`` for text from no file,
+    just the message when nothing is known).  The base of the errors of every reader.
     """
 
     def __init__(self, message: str, path: Optional[str] = None, line: Optional[int] = None,
@@ -35,7 +36,8 @@ class LocatedError(ValueError):
         return where_text(self.path, self.line, self.column)
 
     def __str__(self) -> str:
-        return f"{self.where()}: {self.message}"
+        where = self.where()
+        return f"{where}: {self.message}" if where else self.message
 
     def __reduce__(self):
         return (type(self), (self.message, self.path, self.line, self.column))

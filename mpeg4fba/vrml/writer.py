@@ -250,7 +250,7 @@ def dumps(scene: Scene) -> str:
 
 
 def dump(scene: Scene, path: Union[str, os.PathLike]) -> None:
-    """Write ``scene`` to ``path``, gzip-compressed when it ends in ``.gz`` or ``.wrz``.
+    """Write ``scene`` to ``path``, gzip-compressed when it ends in ``.gz`` or ``.wrz`` (any case).
 
     The file is written to a temporary name beside it and renamed, so a failure never
     leaves a half-written file.
@@ -258,7 +258,7 @@ def dump(scene: Scene, path: Union[str, os.PathLike]) -> None:
     text = dumps(scene)
     path = os.fspath(path)
     data = text.encode("utf-8", "surrogateescape")  # invalid bytes read in go back as they were
-    if path.endswith((".gz", ".wrz")):
+    if path.lower().endswith((".gz", ".wrz")):  # OUT.WRZ too: never plain text under a gzip name
         data = gzip.compress(data, compresslevel=6, mtime=0)
     atomic_write(path, data)
 

@@ -48,6 +48,7 @@ from typing import Optional, Union
 
 import numpy as np
 
+from .._numbers import fromstring
 from ..fba.stream import FapStream
 from ..fba.tables import N_FAPS
 from ..vrml.writer import atomic_write
@@ -392,7 +393,7 @@ def _numbers(arr: np.ndarray, data: bytes, line_start: np.ndarray, value_lines: 
         vals = _decimals(raw, total) if _POINT.search(memoryview(raw)) else _integers(raw, total)
     if vals is None:
         try:
-            vals = np.fromstring(raw, dtype=np.float64, sep=" ")
+            vals = fromstring(raw, np.float64)
             if len(vals) != total or not np.isfinite(vals).all():
                 vals = None
         except ValueError:
@@ -423,7 +424,7 @@ def _integers(buf: Union[bytes, np.ndarray], total: int) -> Optional[np.ndarray]
     ([1, -2, 3], None)
     """
     try:
-        vals = np.fromstring(buf, dtype=np.int64, sep=" ")
+        vals = fromstring(buf, np.int64)
     except ValueError:
         return None
     # numpy saturates integers too big for int64: leave those to the float parser.

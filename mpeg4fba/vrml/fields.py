@@ -34,6 +34,8 @@ from typing import Any, Optional
 
 import numpy as np
 
+from .._numbers import fromstring
+
 __all__ = ["FieldType", "FIELD_TYPES", "Image", "NumberError", "parse_numbers",
            "format_floats", "format_float", "quote_string", "unquote_string"]
 
@@ -109,7 +111,7 @@ def _convert_chunk(chunk: str, base: int, text: str, start: int, end: int, integ
     if not chunk.strip():
         return np.empty(0, dtype=np.int64 if integer else np.float64)
     try:
-        return np.fromstring(chunk, dtype=np.int64 if integer else np.float64, sep=" ")
+        return fromstring(chunk, np.int64 if integer else np.float64)
     except ValueError:
         raise NumberError("not a number", _locate_bad_number(text, start, end)) from None
 

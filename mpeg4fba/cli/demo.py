@@ -32,6 +32,7 @@ from pathlib import Path
 
 import click
 
+from .._atomic import atomic_write
 from . import main
 from .common import check_output_folder
 
@@ -113,7 +114,7 @@ def demo(out_dir: str, quick: bool) -> None:
     report = state["report"]
     result = state["result"]
     lines = _report(state["source"], result, report, times, notes, state["stream"])
-    (out / "report.txt").write_text("\n".join(lines) + "\n", encoding="utf-8")
+    atomic_write(out / "report.txt", "\n".join(lines) + "\n")
     click.echo("\n".join(lines[:4]))
     click.echo(f"\nwritten to {out.resolve()}:")
     for name, what in (("target.wrl", "the cloned face, FAT-bearing VRML97"),

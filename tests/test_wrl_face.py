@@ -417,7 +417,7 @@ def test_malformed_entries_are_kept_for_the_validator():
     assert entry.problems()
     line = next(i for i, t in enumerate(face_text(tri("S"), tables).splitlines(), 1)
                 if "FaceDefMesh {" in t)
-    assert where(face, entry) == f"<string>:{line}"
+    assert where(face, entry) == f"line {line}"
     with pytest.raises(ValueError):
         face.pose({3: 1})
 

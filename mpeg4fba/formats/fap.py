@@ -142,8 +142,12 @@ class _Problems:
 
 
 def _warn(message: str, path: Optional[str], line: Optional[int]) -> None:
-    where = (path or "<string>") + (f":{line}" if line is not None else "")
-    warnings.warn(f"{where}: {message}", FapWarning, stacklevel=4)
+    # text given without a file: the line alone, never a made-up "<string>" file name
+    if path:
+        where = path + (f":{line}" if line is not None else "")
+    else:
+        where = f"line {line}" if line is not None else ""
+    warnings.warn(f"{where}: {message}" if where else message, FapWarning, stacklevel=4)
 
 
 def _parse(data: bytes, path: Optional[str], legacy_divisor: float) -> FapStream:
@@ -253,7 +257,7 @@ def _parse(data: bytes, path: Optional[str], legacy_divisor: float) -> FapStream
     # Range warnings, re-issued so that they point at the caller of read_fap/loads_fap.
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        stream.warn_out_of_range(source=path or "<string>")
+        stream.warn_out_of_range(source=path or "")
     for w in caught:
         warnings.warn(w.message, stacklevel=3)
     return stream

@@ -165,7 +165,8 @@ def where(face: FaceModel, obj: Any) -> str:
     text = src.get("path") or "<face>"
     loc = node.location if isinstance(node, Node) else None
     if loc is not None:
-        text = f"{loc[0] or src.get('path') or '<string>'}:{loc[1]}"
+        file = loc[0] or src.get("path")
+        text = f"{file}:{loc[1]}" if file else f"line {loc[1]}"
     return text
 
 

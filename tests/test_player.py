@@ -260,6 +260,16 @@ def browser():
             b.close()
 
 
+@pytest.fixture(autouse=True)
+def _close_pages(request):
+    """Close every page a test opened: an open player keeps animating (software WebGL),
+    and a dozen of them left open slowed the later tests several times over."""
+    yield
+    if "browser" in request.fixturenames:
+        for context in request.getfixturevalue("browser").contexts:
+            context.close()
+
+
 class Page:
     """A player page open in Chromium, with its errors and the URLs it requested."""
 

@@ -12,12 +12,10 @@
 from __future__ import annotations
 
 import base64
-import contextlib
 import gzip
 import importlib.util
 import json
 import os
-import signal
 import struct
 import tracemalloc
 import zlib
@@ -26,6 +24,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 from click.testing import CliRunner
+
+from _guards import alarm
 
 from mpeg4fba import vrml
 from mpeg4fba.cli import main
@@ -38,20 +38,6 @@ needs_gltf = pytest.mark.skipif(importlib.util.find_spec("pygltflib") is None,
 
 _TRIANGLE = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0]], dtype="<f4")
 _BLOB = _TRIANGLE.tobytes()          # 36 bytes
-
-
-@contextlib.contextmanager
-def _deadline(seconds: int = 30):
-    """Fail instead of hanging when a read never ends (e.g. ``/dev/zero``, a FIFO)."""
-    def ring(signum, frame):
-        raise TimeoutError(f"still reading after {seconds} s")
-    old = signal.signal(signal.SIGALRM, ring)
-    signal.alarm(seconds)
-    try:
-        yield
-    finally:
-        signal.alarm(0)
-        signal.signal(signal.SIGALRM, old)
 
 
 def _doc(uri, byte_length: int = len(_BLOB), images=()) -> dict:
@@ -87,14 +73,14 @@ def _write_glb(path: Path, uri, blob: bytes = b"", **kw) -> Path:
 
 
 def _read(path: Path) -> np.ndarray:
-    with _deadline():
+    with alarm(30, "reading the file"):
         base, targets = read_morph_targets(path)
     assert targets == []
     return base["Tri"]
 
 
 def _refused(path: Path, uri: str, *words: str) -> FormatError:
-    with _deadline(), pytest.raises(FormatError) as info:
+    with alarm(30, "reading the file"), pytest.raises(FormatError) as info:
         read_morph_targets(path)
     e = info.value
     assert e.path == str(path)

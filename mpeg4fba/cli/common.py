@@ -29,7 +29,7 @@ from typing import Any, Callable, Iterable, Optional, Sequence, Tuple, Union
 
 import click
 
-__all__ = ["check_output", "check_output_folder", "same_file", "summarise_warnings",
+__all__ = ["check_output", "check_output_folder", "same_file", "summarise_warnings", "number_spans",
            "TableEntry", "show_progress", "run_steps", "OUTPUT_HINT"]
 
 PathLike = Union[str, "os.PathLike[str]"]
@@ -135,17 +135,25 @@ def check_output_folder(output: PathLike, inputs: Iterable[Input] = (), *,
 _NUMBER = re.compile(r"\d+(?:\.\d+)*")
 
 
+def number_spans(numbers: Iterable[int]) -> str:
+    """Whole numbers as runs, in order.
+
+    >>> number_spans([3, 4, 5, 9, 11, 12])
+    '3-5, 9, 11-12'
+    """
+    runs: list = []
+    for k in sorted(set(numbers)):
+        if runs and runs[-1][1] == k - 1:
+            runs[-1][1] = k
+        else:
+            runs.append([k, k])
+    return ", ".join(f"{a}-{b}" if b > a else f"{a}" for a, b in runs)
+
+
 def _spans(values: list) -> str:
     """``1-3, 14, 43-47`` for whole numbers; others listed as they are (at most 8)."""
     if all(v.isdigit() for v in values):
-        numbers = sorted({int(v) for v in values})
-        runs: list = []
-        for k in numbers:
-            if runs and runs[-1][1] == k - 1:
-                runs[-1][1] = k
-            else:
-                runs.append([k, k])
-        return ", ".join(f"{a}-{b}" if b > a else f"{a}" for a, b in runs)
+        return number_spans(int(v) for v in values)
     seen = list(dict.fromkeys(values))
     return ", ".join(seen[:8]) + (", ..." if len(seen) > 8 else "")
 

@@ -27,6 +27,7 @@ from ..formats.face_files import MESH_SUFFIXES
 from ..vrml import ExternProto, Node, Proto, Scene
 from ..vrml.walk import Mesh, iter_meshes
 from . import main, read_scene, warnings_to_stderr
+from .common import number_spans
 
 __all__ = ["info", "scene_info", "fap_info", "face_info"]
 
@@ -109,19 +110,6 @@ def _text(facts: dict) -> str:
     return "\n".join(lines)
 
 
-def _spans(numbers: list) -> str:
-    """``3-26, 39-42, 63`` for a sorted list of numbers.
-
-    >>> _spans([3, 4, 5, 9, 11, 12])
-    '3-5, 9, 11-12'
-    """
-    out = []
-    for k in numbers:
-        if out and out[-1][1] == k - 1:
-            out[-1][1] = k
-        else:
-            out.append([k, k])
-    return ", ".join(f"{a}-{b}" if b > a else f"{a}" for a, b in out)
 
 
 def fap_info(stream: FapStream, path: Optional[str] = None) -> dict:
@@ -151,7 +139,7 @@ def _fap_text(facts: dict) -> str:
              f"version: {facts['version']}",
              f"name: {facts['name'] or '(none)'}",
              f"animated FAPs: {len(facts['animated'])}"
-             + (f" ({_spans(facts['animated'])})" if facts["animated"] else "")]
+             + (f" ({number_spans(facts['animated'])})" if facts["animated"] else "")]
     if facts["faps"]:
         width = max(len(v["name"]) for v in facts["faps"].values())
         lines.append(f"  {'FAP':>3}  {'name':<{width}}  {'frames':>6}  {'min':>9}  {'max':>9}")

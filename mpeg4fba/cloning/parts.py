@@ -23,20 +23,36 @@ Transforms:
 (['LowerTeeth'], ['LeftEyeball'], True)
 >>> source_transform(face, found["lower teeth"]), target_transform(face, "lower teeth", found)
 ('Jaw', 'Jaw')
+
+Real heads come as one mesh: eyes, teeth and tongue may be welded into the skin's mesh as
+separate connected components (:func:`separate_parts` splits them off), or welded to the
+skin itself, sharing its vertices.  A part is therefore never a mesh (or component) that
+also holds the skin's feature points: an eye whose pupil lies on the skin is no eyeball,
+and the head is cloned as skin, without eyeball motion.  An eye must also be roughly
+spherical (:func:`is_eyeball`).  Why a component holds a point: it has the surface
+nearest to the point (the point's vertex tie, else the closest point of every triangle).
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Iterable, Optional
 
 import numpy as np
+import scipy.sparse as sp
+from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 
-from ..fba.face import FaceModel
+from ..fba.face import FaceMesh, FaceModel
+from ..fba.featurepoints import FeaturePointSet
+from ..fba.requirements import NOT_SURFACE
+from .rigid import sphere_centre
+from .surface import closest_points
 
 __all__ = ["PartSpec", "PARTS", "find_parts", "mesh_holding", "connected_meshes",
            "lowest_common_transform", "moving_transforms", "source_transform",
-           "target_transform", "enclosed_meshes", "HEAD"]
+           "target_transform", "enclosed_meshes", "HEAD",
+           "mesh_components", "is_eyeball", "EYEBALL_ROUNDNESS", "Components",
+           "part_components", "separate_parts"]
 
 
 @dataclass(frozen=True)
@@ -113,20 +129,240 @@ def connected_meshes(face: FaceModel, seeds: Iterable[str], exclude: Iterable[st
     return [n for n in face.meshes if n in found]
 
 
-def find_parts(face: FaceModel) -> dict:
-    """Part name -> list of mesh names, for each part of :data:`PARTS` found, and
-    :data:`HEAD` -> every mesh."""
-    holders = {}
+#: How far from spherical a mesh may be and still be an eyeball: the RMS of its vertices'
+#: distances from the least-squares sphere through them, as a fraction of its radius.  A
+#: sphere is 0; a cornea bulging 2.5 mm out of a 12 mm eyeball over a fifth of it stays
+#: under 0.1; the reference head's other parts (teeth rows, tongue, mouth cavity, hair
+#: cap) are 0.08 to 0.2, but none holds a pupil.  Too low: a modelled cornea makes an
+#: eye skin, and eyeball FAPs are skipped with a warning; too high: a lid or socket piece
+#: holding the pupil would be turned as an eye.
+EYEBALL_ROUNDNESS = 0.1
+
+
+def is_eyeball(vertices: np.ndarray, max_radius: float = np.inf) -> bool:
+    """True when ``vertices`` (a component's, world coordinates) lie roughly on a
+    sphere (:data:`EYEBALL_ROUNDNESS`) of radius at most ``max_radius``.
+
+    >>> d = np.random.default_rng(0).normal(size=(200, 3))
+    >>> ball = d / np.linalg.norm(d, axis=1)[:, None]
+    >>> is_eyeball(ball), is_eyeball(ball * [3, 1, 1]), is_eyeball(ball, max_radius=0.5)
+    (True, False, False)
+    """
+    v = np.asarray(vertices, dtype=np.float64).reshape(-1, 3)
+    if len(v) < 4:
+        return False
+    r = np.linalg.norm(v - sphere_centre(v), axis=1)
+    radius = float(r.mean())
+    if not radius > 0 or radius > max_radius:
+        return False
+    return float(np.sqrt(np.mean((r - radius) ** 2))) <= EYEBALL_ROUNDNESS * radius
+
+
+def mesh_components(triangles: np.ndarray, n_vertices: int) -> np.ndarray:
+    """(n_vertices,) label of each vertex's connected component (vertices joined by
+    triangle edges; a vertex in no triangle is a component of its own).
+
+    >>> mesh_components(np.array([[0, 1, 2], [3, 4, 5], [2, 6, 0]]), 8).tolist()
+    [0, 0, 0, 1, 1, 1, 0, 2]
+    """
+    t = np.asarray(triangles, dtype=np.int64).reshape(-1, 3)
+    a = np.concatenate([t[:, 0], t[:, 1]])
+    b = np.concatenate([t[:, 1], t[:, 2]])
+    graph = sp.coo_matrix((np.ones(len(a)), (a, b)), shape=(n_vertices, n_vertices))
+    return connected_components(graph, directed=False)[1]
+
+
+@dataclass
+class Components:
+    """A face's meshes cut into connected components, and which holds each feature point.
+
+    ``mesh`` and ``labels``: per component, its mesh and the vertex label within that
+    mesh (:func:`mesh_components`); ``holder``: point id -> component; ``distance``: point
+    id -> its distance from that component's surface (0 for a vertex tie); ``skin``: the
+    components holding a point of the skin (neither a part's nor inside the head,
+    :data:`NOT_SURFACE`); ``parts``: part name -> its component; ``rejected``: part name
+    -> why its point's component is not that part.
+    """
+
+    mesh: list
+    labels: dict
+    holder: dict
+    distance: dict
+    skin: set
+    parts: dict
+    rejected: dict
+
+
+#: Every part's identifying points (the eyes', teeth's and tongue's).
+_PART_POINTS = frozenset(fp for s in PARTS for fp in s.points)
+
+
+def part_components(face: FaceModel, tolerance: Optional[float] = None) -> Components:
+    """The face's components, which holds each feature point, the skin and the parts
+    (see the module docstring).  A point holds to the component with the nearest
+    surface, within ``tolerance`` (default 5 % of ES0); an eye's component must be an
+    eyeball (:func:`is_eyeball`, radius at most half ES0) and no part's may hold a skin
+    point."""
+    tol = 0.05 * _scale(face) if tolerance is None else float(tolerance)
+    names = [n for n, m in face.meshes.items() if len(m.vertices)]
+    labels, comp_mesh, verts, tris, tri_comp, vert_comp = {}, [], [], [], [], []
+    first = 0
+    for n in names:
+        m = face.meshes[n]
+        lab = mesh_components(m.triangles, len(m.vertices))
+        labels[n] = lab
+        base = len(comp_mesh)
+        comp_mesh.extend([n] * (int(lab.max()) + 1))
+        verts.append(face.world_vertices(n))
+        tris.append(m.triangles + first)
+        tri_comp.append(base + lab[m.triangles[:, 0]])
+        vert_comp.append(base + lab)
+        first += len(m.vertices)
+    holder, distance = {}, {}
+    offsets = dict(zip(names, np.cumsum([0] + [len(face.meshes[n].vertices) for n in names])))
+    all_comp = np.concatenate(vert_comp) if vert_comp else np.zeros(0, dtype=np.int64)
+    free = []
+    for fp in face.points:
+        tie = face.points.vertex(fp)
+        if tie is not None and tie[0] in offsets and tie[1] < len(face.meshes[tie[0]].vertices):
+            holder[fp], distance[fp] = int(all_comp[offsets[tie[0]] + tie[1]]), 0.0
+        else:
+            free.append(fp)
+    T = np.vstack(tris) if tris else np.zeros((0, 3), dtype=np.int64)
+    if free and len(T):
+        V = np.vstack(verts)
+        t, _, d = closest_points(np.array([face.points[fp] for fp in free]), V, T, k=16)
+        comp = np.concatenate(tri_comp)[t]
+        for fp, c, dist in zip(free, comp, d):
+            holder[fp], distance[fp] = int(c), float(dist)
+    skin = {holder[fp] for fp in holder
+            if fp not in _PART_POINTS and fp not in NOT_SURFACE and distance[fp] <= tol}
+    fapu = face.fapu
+    max_radius = 0.5 * float(fapu.ES0) if fapu is not None and fapu.ES0 > 0 else np.inf
+    parts, rejected = {}, {}
     for spec in PARTS:
         for fp in spec.points:
-            m = mesh_holding(face, fp)
-            if m is not None:
-                holders[spec.name] = m
+            if fp not in holder or distance[fp] > tol:
+                continue
+            c = holder[fp]
+            if c in skin:
+                rejected[spec.name] = f"its point {fp} lies on the skin's mesh {comp_mesh[c]}"
+            elif spec.kind == "eye" and not is_eyeball(
+                    verts[names.index(comp_mesh[c])][labels[comp_mesh[c]] == _local(comp_mesh, c)],
+                    max_radius):
+                rejected[spec.name] = (f"the component of {comp_mesh[c]} at its point {fp} is "
+                                       "not a round eyeball")
+            else:
+                parts[spec.name] = c
+            break
+    return Components(comp_mesh, labels, holder, distance, skin, parts, rejected)
+
+
+def _local(comp_mesh: list, c: int) -> int:
+    """The label within its mesh of global component ``c``."""
+    return c - comp_mesh.index(comp_mesh[c])
+
+
+def separate_parts(face: FaceModel, components: Optional[Components] = None) -> FaceModel:
+    """The face with every part that shares a mesh with something else (the skin, the
+    other eye) split off into a mesh of its own, named ``<mesh>_<Part>`` (e.g.
+    ``head_LeftEye``), under the same Transform; the face itself when nothing is to split
+    or it has a FAT (whose vertex indices would change).  Vertex ties of the feature
+    points and colours per vertex follow their vertices.
+
+    >>> from mpeg4fba.models import reference_head
+    >>> face = reference_head(resolution=0.5)
+    >>> separate_parts(face) is face
+    True
+    """
+    if len(face.fat):
+        return face
+    found = part_components(face) if components is None else components
+    split: dict = {}                       # mesh -> [(part name, local label)]
+    for part, c in found.parts.items():
+        m = found.mesh[c]
+        split.setdefault(m, []).append((part, _local(found.mesh, c)))
+    todo = {m: cut for m, cut in split.items()
+            if len(cut) > 1 or len(np.unique(found.labels[m])) > 1}
+    if not todo:
+        return face
+    meshes, colors, where = [], {}, {}
+    taken = set(face.meshes) | set(face.transforms)
+    for name, mesh in face.meshes.items():
+        pieces = []
+        lab = found.labels.get(name)
+        if name in todo:
+            rest = np.ones(len(mesh.vertices), dtype=bool)
+            for part, label in todo[name]:
+                keep = lab == label
+                rest &= ~keep
+                new = _unique_name(f"{name}_{''.join(w.capitalize() for w in part.split())}", taken)
+                pieces.append((new, keep))
+            if rest.any():
+                pieces.insert(0, (name, rest))
+        else:
+            pieces = [(name, None)]
+        for new, keep in pieces:
+            if keep is None:
+                meshes.append(mesh)
+                if name in face.colors:
+                    colors[name] = face.colors[name]
+                continue
+            index = np.full(len(mesh.vertices), -1, dtype=np.int64)
+            index[keep] = np.arange(int(keep.sum()))
+            tri = mesh.triangles[keep[mesh.triangles[:, 0]]]
+            meshes.append(replace(mesh, name=new, vertices=mesh.vertices[keep],
+                                  triangles=index[tri]))
+            c = face.colors.get(name)
+            if c is not None:
+                c = np.asarray(c)
+                colors[new] = c[keep] if c.ndim == 2 and len(c) == len(keep) else c
+            where[name] = where.get(name, []) + [(new, keep, index)]
+    ties = {}
+    for fp, (m, v) in face.points.vertices.items():
+        for new, keep, index in where.get(m, ()):
+            if v < len(keep) and keep[v]:
+                ties[fp] = (new, int(index[v]))
                 break
+        else:
+            ties[fp] = (m, v)
+    points = FeaturePointSet({fp: face.points[fp] for fp in face.points}, ties)
+    out = FaceModel(meshes, face.transforms.values(), points=points, fapu=face._fapu,
+                    fat=face.fat, name=face.name)
+    out.colors = colors
+    # named areas are vertex indices of meshes that may just have been renumbered
+    out.regions = {}
+    return out
+
+
+def _unique_name(base: str, taken: set) -> str:
+    name, k = base, 2
+    while name in taken:
+        name, k = f"{base}_{k}", k + 1
+    taken.add(name)
+    return name
+
+
+def find_parts(face: FaceModel, reasons: Optional[dict] = None) -> dict:
+    """Part name -> list of mesh names, for each part of :data:`PARTS` found, and
+    :data:`HEAD` -> every mesh.  A part is found on a mesh of its own (after
+    :func:`separate_parts`): a mesh that also holds a skin point, or an eye's that is not
+    round, is no part, and ``reasons`` (a dict, when given) gets part name -> why."""
+    found = part_components(face)
+    if reasons is not None:
+        reasons.update(found.rejected)
+    holders = {}
+    for part, c in found.parts.items():
+        m = found.mesh[c]
+        if len(np.unique(found.labels[m])) > 1 and any(
+                found.mesh[o] == m for o in found.skin):
+            if reasons is not None:
+                reasons[part] = (f"it shares the mesh {m} with the skin "
+                                 "(separate_parts splits it off)")
+            continue
+        holders[part] = m
     # meshes holding a feature point that belongs to no part: the skin (and hair...)
-    part_points = {fp for s in PARTS for fp in s.points}
-    skin = {mesh_holding(face, fp, 0.0) for fp in face.points if fp not in part_points}
-    skin.discard(None)
+    skin = {found.mesh[c] for c in found.skin}
     out = {}
     for name, seed in holders.items():
         others = {m for n, m in holders.items() if n != name} | skin

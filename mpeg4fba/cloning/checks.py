@@ -126,18 +126,26 @@ def check_placement(face: FaceModel, which: str = "", *,
         scale = _unit_scale(face, p, tolerance)
         if scale is not None:
             raise PlacementError(_unit_message(who, face, scale), point_order(ids))
-        median = float(np.median(d / size)) * 100
-        raise PlacementError(
-            f"{who} feature points do not fit its mesh: {int(off.sum())} of {len(ids)} lie "
-            f"off the surface (median {median:.1f} % of the face size): a point file made "
-            "for another face, or for this one moved or turned?", point_order(ids))
     bad = [(k, dist) for k, dist, o in zip(ids, d, off) if o]
-    listed = ", ".join(f"{k} ({dist / size * 100:.1f} %)" for k, dist in bad)
+    shown = bad if len(bad) <= _LISTED else sorted(bad, key=lambda b: -b[1])[:_LISTED]
+    listed = ", ".join(f"{k} ({dist / size * 100:.1f} %)" for k, dist in shown)
+    if len(shown) < len(bad):
+        listed += f" and {len(bad) - len(shown)} more"
+    where = (f"(distance from the surface in % of the face size, {size:.4g}; at most "
+             f"{tolerance * 100:g} % is allowed)")
+    if off.mean() >= 0.25:
+        raise PlacementError(
+            f"{who} feature points do not fit its mesh: {len(bad)} of {len(ids)} lie off the "
+            f"surface, {listed} {where}: a point file made for another face, or for this "
+            "one moved or turned?", [k for k, _ in bad])
     raise PlacementError(
         f"{who} feature point{'s' if len(bad) > 1 else ''} {listed} lie{'' if len(bad) > 1 else 's'}"
-        f" off its mesh (distance from the surface in % of the face size, {size:.4g}; at "
-        f"most {tolerance * 100:g} % is allowed): move {'them' if len(bad) > 1 else 'it'} "
-        "onto the surface", [k for k, _ in bad])
+        f" off its mesh {where}: move {'them' if len(bad) > 1 else 'it'} onto the surface",
+        [k for k, _ in bad])
+
+
+#: Points named one by one in an error before "and N more".
+_LISTED = 12
 
 
 def _unit_scale(face: FaceModel, p: np.ndarray, tolerance: float) -> Optional[float]:

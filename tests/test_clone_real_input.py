@@ -17,8 +17,8 @@ from click.testing import CliRunner
 from mpeg4fba.cli import main
 from mpeg4fba.cloning import REQUIRED_POINTS, CloneWarning, clone
 from mpeg4fba.cloning.checks import PlacementError, check_placement, surface_distances
-from mpeg4fba.cloning.parts import (find_parts, is_eyeball, mesh_components, part_components,
-                                    separate_parts)
+from mpeg4fba.cloning.parts import (carry_part_points, find_parts, is_eyeball, mesh_components,
+                                    part_components, separate_parts)
 from mpeg4fba.cloning.surface import vertex_normals
 from mpeg4fba.fba.compliance import check_fat
 from mpeg4fba.fba.face import FaceMesh, FaceModel
@@ -149,6 +149,27 @@ def test_find_parts_never_takes_the_whole_skin_for_an_eye(welded, fused):
     assert "lies on the skin" in reasons["left eye"]
 
 
+def test_an_iris_modelled_apart_goes_with_its_eye_not_the_socket(head):
+    """One mesh: skin, left eyeball, an iris (a small ball inside the eyeball, at its
+    front) and a socket (a ball round the eyeball, a little larger)."""
+    eye = head.world_vertices("LeftEyeball")
+    tris = head.meshes["LeftEyeball"].triangles
+    centre = eye.mean(axis=0)
+    front = centre + (head.points["3.5"] - centre) * 0.8
+    pieces = [(head.world_vertices("Skin"), head.meshes["Skin"].triangles), (eye, tris),
+              ((eye - centre) * 0.15 + front, tris), ((eye - centre) * 1.3 + centre, tris)]
+    verts, faces, first = [], [], 0
+    for v, t in pieces:
+        verts.append(v)
+        faces.append(t + first)
+        first += len(v)
+    face = FaceModel([FaceMesh("head", np.vstack(verts), np.vstack(faces))],
+                     points=FeaturePointSet({k: head.points[k] for k in REQUIRED_POINTS}))
+    split = separate_parts(face)
+    assert len(split.meshes["head_LeftEye"].vertices) == 2 * len(eye)      # eyeball + iris
+    assert len(split.meshes["head"].vertices) == len(pieces[0][0]) + len(eye)  # + socket
+
+
 def test_both_eyes_in_one_mesh_become_two(head):
     eyes = one_mesh(head, list(EYES), [], name="Eyes")
     skin = one_mesh(head, ["Skin"], list(head.points))
@@ -214,6 +235,32 @@ def test_exactly_the_required_points_clone_and_validate(skin_clone, head):
         assert mesh == "head"
         # as near as the mapping puts the ears (the registration is loosest there)
         assert np.linalg.norm(out.points[fp] - head.points[fp]) < 0.15 * es
+
+
+def separate_meshes(head: FaceModel, names) -> FaceModel:
+    """``names`` of ``head`` as meshes of their own at the root, the required points."""
+    return FaceModel([FaceMesh(n, head.world_vertices(n), head.meshes[n].triangles)
+                      for n in names],
+                     points=FeaturePointSet({k: head.points[k] for k in REQUIRED_POINTS}))
+
+
+def test_teeth_and_tongue_points_are_carried_from_the_source(source, head):
+    face = separate_meshes(head, ["Skin", *EYES, "UpperTeeth", "LowerTeeth", "Tongue", "Mouth"])
+    carried = carry_part_points(source, face)
+    assert set(carried) == {"9.8", "9.9", "9.10", "9.11", "6.1", "6.2", "6.3", "6.4"}
+    es = float(head.fapu.ES0)
+    for fp, (mesh, vertex) in carried.items():
+        assert mesh == head.points.vertex(fp)[0]          # on the right part, clenched or not
+        assert np.linalg.norm(face.world_vertices(mesh)[vertex] - head.points[fp]) < 0.02 * es
+    out, messages = clone_recording(source, face)
+    assert [m for m in messages if "carried over" in m]
+    assert set(out.fat.faps) == set(source.fat.faps) and validate(out).ok
+    assert not [m for m in messages if "has no" in m]
+
+
+def test_a_mouth_cavity_is_not_taken_for_teeth(source, head):
+    face = separate_meshes(head, ["Skin", *EYES, "Mouth"])
+    assert carry_part_points(source, face) == {}
 
 
 def test_missing_required_point_fails_before_any_work(source, skin_only):

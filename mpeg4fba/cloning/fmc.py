@@ -52,15 +52,14 @@ from scipy.spatial import cKDTree
 from ..fba.face import FaceModel, FaceTransform
 from ..fba.fat import FAT, FaceDefMesh, FaceDefTable, FaceDefTransform, interval_weights
 from ..fba.featurepoints import FeaturePointError, FeaturePointSet, point_order
-from ..fba.requirements import fap_points, required_points
+from ..fba.requirements import NOT_SURFACE, fap_points, required_points
 from ..fba.stream import FapStream
-from ..fba.requirements import NOT_SURFACE
 from .alignment import REQUIRED_POINTS, FaceSpace, align
 from .interp2d import antialiased_weights
 from .lips import LIPS, OUTSIDE, SLITS, opposite, slit_regions
 from .checks import check_placement
-from .parts import (HEAD, PARTS, find_parts, lowest_common_transform, separate_parts,
-                    source_transform, target_transform)
+from .parts import (HEAD, PARTS, carry_part_points, find_parts, lowest_common_transform,
+                    separate_parts, source_transform, target_transform)
 from .projection import MOUTH_ANGLE
 from .rigid import axis_angle, fit_rigid, rotation_centre, sphere_centre
 from .surface import (REGISTRATION_FINE_SCALES, REGISTRATION_MEMBRANE, closest_points,
@@ -339,6 +338,16 @@ class FacialMotionCloner:
         self.overlap = overlap
         for face, which in ((source, "source"), (target, "target")):
             check_placement(face, which)
+        #: the target's part points carried over from the source (teeth and tongue given
+        #: without points), id -> (mesh, vertex)
+        self.carried_points = carry_part_points(source, target)
+        if self.carried_points:
+            target = _with_points(target, self.carried_points)
+            ids = point_order(self.carried_points)
+            warnings.warn(f"the target's feature point{'s' if len(ids) > 1 else ''} "
+                          f"{', '.join(ids)} (its teeth, tongue) were carried over from the "
+                          "source's by its other points; give them to place them yourself",
+                          CloneWarning, stacklevel=2)
         # eyes, teeth, tongue welded into another mesh become meshes of their own (the
         # cloned face is the target so split)
         source, target = separate_parts(source), separate_parts(target)
@@ -736,16 +745,18 @@ class FacialMotionCloner:
             else:
                 out.fat.add(t)
         out.invalidate()
-        for message in installer.notes + self._skip_notes(installer.skipped, new_tables, out.fat):
+        for message in installer.notes + self._skip_notes(installer.skipped, out.fat):
             warnings.warn(message, CloneWarning, stacklevel=2)
         for lacking, faps in dropped.items():
             warnings.warn(f"the target lacks feature point{'s' if len(lacking) > 1 else ''} "
-                          f"{', '.join(lacking)}, which the source has nowhere the target's "
-                          f"skin maps to: FAP{'s' if len(faps) > 1 else ''} "
+                          f"{', '.join(lacking)} and the mapping can't put "
+                          f"{'them' if len(lacking) > 1 else 'it'} (the source has "
+                          f"{'them' if len(lacking) > 1 else 'it'} nowhere the target's skin "
+                          f"maps to, or not at all): FAP{'s' if len(faps) > 1 else ''} "
                           f"{_runs(faps)} not cloned", CloneWarning, stacklevel=2)
         return out
 
-    def _skip_notes(self, skipped: dict, tables: list, fat: FAT) -> list:
+    def _skip_notes(self, skipped: dict, fat: FAT) -> list:
         """One message per kind of part the target lacks (eyeballs, teeth, tongue): why,
         and which of the source's tables lost that motion or were left out."""
         out = []
@@ -773,7 +784,8 @@ class FacialMotionCloner:
     def output_points(self) -> FeaturePointSet:
         """The target's feature points plus those the source's FAPs need that the target
         lacks and the mapping can put (:meth:`derive_points`)."""
-        need = required_points(self.source.fat.faps, parts=self._target_kinds(), fapu=True)
+        need = required_points(self.source.fat.faps, parts=self._target_kinds(), fapu=True,
+                               base=REQUIRED_POINTS)
         missing = self.target.points.missing(need)
         if not missing:
             return self.target.points
@@ -1282,6 +1294,19 @@ def _play_table(face: FaceModel, table: FaceDefTable, value: float):
     else:
         s = FapStream.from_values({table.fap: [value]}, fps=1, n_frames=1)
     return solo.play(s)
+
+
+def _with_points(face: FaceModel, ties: dict) -> FaceModel:
+    """A copy of ``face`` sharing its meshes, with the points ``ties`` (id -> (mesh,
+    vertex)) added."""
+    out = _copy_face(face, share=True)
+    positions = {k: face.points[k] for k in face.points}
+    vertices = dict(face.points.vertices)
+    for k, (mesh, vertex) in ties.items():
+        positions[k] = face.world_vertices(mesh)[vertex]
+        vertices[k] = (mesh, vertex)
+    out.points = FeaturePointSet(positions, vertices)
+    return out
 
 
 def _copy_face(face: FaceModel, share: bool = False) -> FaceModel:

@@ -46,13 +46,13 @@ from ..fba.face import FaceMesh, FaceModel
 from ..fba.featurepoints import FeaturePointSet
 from ..fba.requirements import NOT_SURFACE
 from .rigid import sphere_centre
-from .surface import closest_points
+from .surface import closest_points, feature_warp
 
 __all__ = ["PartSpec", "PARTS", "find_parts", "mesh_holding", "connected_meshes",
            "lowest_common_transform", "moving_transforms", "source_transform",
            "target_transform", "enclosed_meshes", "HEAD",
            "mesh_components", "is_eyeball", "EYEBALL_ROUNDNESS", "Components",
-           "part_components", "separate_parts"]
+           "part_components", "separate_parts", "carry_part_points", "labels_of"]
 
 
 @dataclass(frozen=True)
@@ -204,36 +204,17 @@ def part_components(face: FaceModel, tolerance: Optional[float] = None) -> Compo
     eyeball (:func:`is_eyeball`, radius at most half ES0) and no part's may hold a skin
     point."""
     tol = 0.05 * _scale(face) if tolerance is None else float(tolerance)
-    names = [n for n, m in face.meshes.items() if len(m.vertices)]
-    labels, comp_mesh, verts, tris, tri_comp, vert_comp = {}, [], [], [], [], []
-    first = 0
-    for n in names:
-        m = face.meshes[n]
-        lab = mesh_components(m.triangles, len(m.vertices))
-        labels[n] = lab
-        base = len(comp_mesh)
-        comp_mesh.extend([n] * (int(lab.max()) + 1))
-        verts.append(face.world_vertices(n))
-        tris.append(m.triangles + first)
-        tri_comp.append(base + lab[m.triangles[:, 0]])
-        vert_comp.append(base + lab)
-        first += len(m.vertices)
-    holder, distance = {}, {}
-    offsets = dict(zip(names, np.cumsum([0] + [len(face.meshes[n].vertices) for n in names])))
-    all_comp = np.concatenate(vert_comp) if vert_comp else np.zeros(0, dtype=np.int64)
-    free = []
+    V, T, tri_comp, offsets, labels, comp_mesh = _stacked(face)
+    holder, distance, free = {}, {}, []
     for fp in face.points:
         tie = face.points.vertex(fp)
-        if tie is not None and tie[0] in offsets and tie[1] < len(face.meshes[tie[0]].vertices):
-            holder[fp], distance[fp] = int(all_comp[offsets[tie[0]] + tie[1]]), 0.0
+        if tie is not None and tie[0] in offsets and tie[1] < len(labels[tie[0]]):
+            holder[fp], distance[fp] = comp_mesh.index(tie[0]) + int(labels[tie[0]][tie[1]]), 0.0
         else:
             free.append(fp)
-    T = np.vstack(tris) if tris else np.zeros((0, 3), dtype=np.int64)
     if free and len(T):
-        V = np.vstack(verts)
         t, _, d = closest_points(np.array([face.points[fp] for fp in free]), V, T, k=16)
-        comp = np.concatenate(tri_comp)[t]
-        for fp, c, dist in zip(free, comp, d):
+        for fp, c, dist in zip(free, tri_comp[t], d):
             holder[fp], distance[fp] = int(c), float(dist)
     skin = {holder[fp] for fp in holder
             if fp not in _PART_POINTS and fp not in NOT_SURFACE and distance[fp] <= tol}
@@ -248,7 +229,7 @@ def part_components(face: FaceModel, tolerance: Optional[float] = None) -> Compo
             if c in skin:
                 rejected[spec.name] = f"its point {fp} lies on the skin's mesh {comp_mesh[c]}"
             elif spec.kind == "eye" and not is_eyeball(
-                    verts[names.index(comp_mesh[c])][labels[comp_mesh[c]] == _local(comp_mesh, c)],
+                    face.world_vertices(comp_mesh[c])[labels[comp_mesh[c]] == _local(comp_mesh, c)],
                     max_radius):
                 rejected[spec.name] = (f"the component of {comp_mesh[c]} at its point {fp} is "
                                        "not a round eyeball")
@@ -278,14 +259,18 @@ def separate_parts(face: FaceModel, components: Optional[Components] = None) -> 
     if len(face.fat):
         return face
     found = part_components(face) if components is None else components
-    split: dict = {}                       # mesh -> [(part name, local label)]
+    split: dict = {}                       # mesh -> [(part name, local labels)]
     for part, c in found.parts.items():
         m = found.mesh[c]
-        split.setdefault(m, []).append((part, _local(found.mesh, c)))
-    todo = {m: cut for m, cut in split.items()
-            if len(cut) > 1 or len(np.unique(found.labels[m])) > 1}
+        split.setdefault(m, []).append((part, [_local(found.mesh, c)]))
+    skin_meshes = {found.mesh[c] for c in found.skin}
+    # a mesh that is one part and nothing else stays whole (an eyeball with its iris
+    # and cornea as components of their own)
+    todo = {m: cut for m, cut in split.items() if len(cut) > 1 or m in skin_meshes}
     if not todo:
         return face
+    for m, cut in todo.items():
+        _enclosed_components(face, found, m, cut)
     meshes, colors, where = [], {}, {}
     taken = set(face.meshes) | set(face.transforms)
     for name, mesh in face.meshes.items():
@@ -293,8 +278,8 @@ def separate_parts(face: FaceModel, components: Optional[Components] = None) -> 
         lab = found.labels.get(name)
         if name in todo:
             rest = np.ones(len(mesh.vertices), dtype=bool)
-            for part, label in todo[name]:
-                keep = lab == label
+            for part, labels in todo[name]:
+                keep = np.isin(lab, labels)
                 rest &= ~keep
                 new = _unique_name(f"{name}_{''.join(w.capitalize() for w in part.split())}", taken)
                 pieces.append((new, keep))
@@ -335,12 +320,136 @@ def separate_parts(face: FaceModel, components: Optional[Components] = None) -> 
     return out
 
 
+def _enclosed_components(face: FaceModel, found: Components, mesh: str, cut: list) -> None:
+    """Add to each part of ``cut`` (part name, [its component's label]) the other
+    components of ``mesh`` that hold no point and lie wholly inside it: for an eye,
+    inside its eyeball's sphere grown by a tenth (an iris or a cornea modelled apart,
+    not the socket round it); for teeth and tongue, inside its bounding box grown by a
+    tenth of its size (not a mouth cavity round the teeth)."""
+    lab = found.labels[mesh]
+    v = face.world_vertices(mesh)
+    held = {_local(found.mesh, c) for c in set(found.holder.values()) if found.mesh[c] == mesh}
+    others = np.setdiff1d(np.unique(lab), list(held))
+    if not len(others):
+        return
+    n = int(lab.max()) + 1
+    lo = np.full((n, 3), np.inf)
+    hi = np.full((n, 3), -np.inf)
+    np.minimum.at(lo, lab, v)
+    np.maximum.at(hi, lab, v)
+    for part, labels in cut:
+        if _SPEC[part].kind == "eye":
+            # an eye's: wholly inside its sphere grown by a tenth (not the socket round it)
+            ball = v[lab == labels[0]]
+            centre = sphere_centre(ball)
+            reach = 1.1 * np.linalg.norm(ball - centre, axis=1).mean()
+            far = np.zeros(n)
+            np.maximum.at(far, lab, np.linalg.norm(v - centre, axis=1))
+            inside = others[far[others] <= reach]
+        else:
+            margin = 0.1 * (hi[labels[0]] - lo[labels[0]]).max()
+            inside = others[(lo[others] >= lo[labels[0]] - margin).all(axis=1)
+                            & (hi[others] <= hi[labels[0]] + margin).all(axis=1)]
+        labels.extend(int(k) for k in inside)
+        others = np.setdiff1d(others, inside)
+
+
 def _unique_name(base: str, taken: set) -> str:
     name, k = base, 2
     while name in taken:
         name, k = f"{base}_{k}", k + 1
     taken.add(name)
     return name
+
+
+def carry_part_points(source: FaceModel, target: FaceModel) -> dict:
+    """Point id -> (mesh, vertex) of the target for the points of each part the source
+    has and the target's points don't find (teeth and tongue given no points).
+
+    The source's part (its component's vertices) and points are carried over by the
+    thin-plate spline that takes the source's skin points onto the target's.  The
+    target's part is the component most of the carried vertices lie nearest to (their
+    median distance within 5 % of the target's ES0), holding no skin point nor another
+    part's, and for an eye an eyeball; each point goes to the nearest vertex of that
+    component.  Parts touch (teeth modelled clenched, the tongue behind the lower
+    teeth), so a part is told by its whole shape, not by the one component nearest a
+    point.  A target without such a part (a head without teeth, whose mouth cavity lies
+    further off) gets none.
+
+    >>> from mpeg4fba.models import reference_head
+    >>> face = reference_head(resolution=0.5)
+    >>> carry_part_points(face, face)          # every part found by its own points
+    {}
+    """
+    src, tgt = part_components(source), part_components(target)
+    todo = [spec for spec in PARTS if spec.name in src.parts and spec.name not in tgt.parts
+            and spec.name not in tgt.rejected
+            and not any(fp in target.points for fp in spec.points)]
+    common = [k for k in source.points if k in target.points and k not in NOT_SURFACE]
+    V, T, tri_comp, offsets, labels, comp_mesh = _stacked(target)
+    if not todo or len(common) < 5 or not len(T):
+        return {}
+    moving = np.array([source.points[k] for k in common])
+    fixed = np.array([target.points[k] for k in common])
+    tol = 0.05 * _scale(target)
+    fapu = target.fapu
+    max_radius = 0.5 * float(fapu.ES0) if fapu is not None and fapu.ES0 > 0 else np.inf
+    taken = set(tgt.parts.values()) | tgt.skin
+    names, firsts = list(offsets), np.array(list(offsets.values()))
+    out = {}
+    for spec in todo:
+        c = src.parts[spec.name]
+        mesh = src.mesh[c]
+        shape = source.world_vertices(mesh)[labels_of(src, c)]
+        # a few hundred vertices tell a shape as well as all of them
+        shape = shape[:: max(1, len(shape) // 256)]
+        ids = [fp for fp in spec.points if fp in source.points]
+        carried = feature_warp(moving, fixed, np.vstack([shape, [source.points[k] for k in ids]]))
+        t, _, d = closest_points(carried[:len(shape)], V, T, k=16)
+        comps, votes = np.unique(tri_comp[t], return_counts=True)
+        best = int(comps[np.argmax(votes)])
+        if best in taken or np.median(d[tri_comp[t] == best]) > tol or votes.max() < len(t) / 2:
+            continue
+        if spec.kind == "eye" and not is_eyeball(
+                target.world_vertices(comp_mesh[best])[labels[comp_mesh[best]]
+                                                       == _local(comp_mesh, best)], max_radius):
+            continue
+        taken.add(best)
+        own = np.flatnonzero(tri_comp == best)
+        tri, bary, _ = closest_points(carried[len(shape):], V, T[own], k=16)
+        rows = T[own][tri, np.argmax(bary, axis=1)]
+        for fp, row in zip(ids, rows):
+            m = names[int(np.searchsorted(firsts, row, side="right")) - 1]
+            out[fp] = (m, int(row - offsets[m]))
+    return out
+
+
+def labels_of(found: Components, component: int) -> np.ndarray:
+    """(n,) bool over the vertices of its mesh: those of ``component``."""
+    return found.labels[found.mesh[component]] == _local(found.mesh, component)
+
+
+def _stacked(face: FaceModel) -> tuple:
+    """(world vertices, triangles, component of each triangle, first row of each mesh,
+    mesh name -> vertex labels within it, mesh of each component) of every mesh with
+    vertices, stacked; components numbered mesh by mesh (:func:`mesh_components`)."""
+    verts, tris, tri_comp, offsets, labels, comp_mesh, first = [], [], [], {}, {}, [], 0
+    for n, m in face.meshes.items():
+        if not len(m.vertices):
+            continue
+        lab = mesh_components(m.triangles, len(m.vertices))
+        labels[n] = lab
+        offsets[n] = first
+        verts.append(face.world_vertices(n))
+        tris.append(m.triangles + first)
+        tri_comp.append(len(comp_mesh) + lab[m.triangles[:, 0]])
+        comp_mesh.extend([n] * (int(lab.max()) + 1))
+        first += len(m.vertices)
+    if not verts:
+        return (np.zeros((0, 3)), np.zeros((0, 3), dtype=np.int64), np.zeros(0, dtype=np.int64),
+                {}, {}, [])
+    return (np.vstack(verts), np.vstack(tris), np.concatenate(tri_comp), offsets, labels,
+            comp_mesh)
 
 
 def find_parts(face: FaceModel, reasons: Optional[dict] = None) -> dict:

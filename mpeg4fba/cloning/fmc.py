@@ -3,6 +3,11 @@ face onto a target face, as a FAT.
 
 The steps, each in its own module:
 
+0. Before any work: the required points (:data:`REQUIRED_POINTS`; the rest of what
+   :func:`mpeg4fba.fba.requirements.required_points` asks for is put by the cloning),
+   the points on the meshes in the meshes' units (:mod:`~mpeg4fba.cloning.checks`);
+   teeth and tongue points the target lacks carried over from the source, and parts
+   welded into another mesh split off (:mod:`~mpeg4fba.cloning.parts`).
 1. Both faces' skin (every mesh that is not an eye, teeth or tongue,
    :mod:`~mpeg4fba.cloning.parts`) go to the 2D alignment space
    (:class:`~mpeg4fba.cloning.alignment.FaceSpace`: normalised, then cylindrically
@@ -27,6 +32,10 @@ The steps, each in its own module:
    it is not rigid (a pupil dilating, a tongue curling), mapped vertex to vertex in 3D.
 6. Each target table gets the source's interval borders: the target's displacement at
    each border, differenced, gives the per-interval displacements of FaceDefMesh.
+   Tables that move nothing on the target (the eyeball FAPs of a head without
+   eyeballs) are left out, with one warning per missing part; skin points the
+   target lacks and its FAPs need (the ears') are put where the mapping places the
+   source's (:meth:`FacialMotionCloner.derive_points`).
 
 Example
 -------

@@ -42,7 +42,7 @@ import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 
-from ..fba.face import FaceMesh, FaceModel
+from ..fba.face import FaceModel
 from ..fba.featurepoints import FeaturePointSet
 from ..fba.requirements import NOT_SURFACE
 from .rigid import sphere_centre

@@ -251,8 +251,13 @@ def _runs(numbers) -> str:
     return ", ".join(out)
 
 
-def _no_point(part: str) -> str:
-    return f"no mesh of its own at its point {' or '.join(_SPEC[part].points)}"
+def _no_point(part: str, face: FaceModel) -> str:
+    """Why ``face`` has no ``part`` when no component was refused."""
+    ids = _SPEC[part].points
+    if any(fp in face.points for fp in ids):
+        return f"no mesh of its own at its point {' or '.join(ids)}"
+    return (f"no point {' or '.join(ids)} given, and no mesh shaped like the source's "
+            "where it would be")
 
 
 class CloneWarning(UserWarning):
@@ -779,7 +784,7 @@ class FacialMotionCloner:
             kept = sorted(f for f, sel in keys if f > 2 and f in fat.faps)
             high = sorted({"visemes" if f == 1 else "expressions" for f, _ in keys if f <= 2})
             why = "; ".join((f"{p}: " if len(parts) > 1 else "")
-                            + self.target_missing_parts.get(p, _no_point(p)) for p in parts)
+                            + self.target_missing_parts.get(p, _no_point(p, self.target)) for p in parts)
             text = f"the target has no {' or '.join(parts) if kind == 'teeth' else label} ({why})"
             if gone:
                 text += f"; FAP{'s' if len(gone) > 1 else ''} {_runs(gone)} not cloned"

@@ -397,31 +397,43 @@ def carry_part_points(source: FaceModel, target: FaceModel) -> dict:
     taken = set(tgt.parts.values()) | tgt.skin
     names, firsts = list(offsets), np.array(list(offsets.values()))
     out = {}
+    vert_comp = np.concatenate([comp_mesh.index(n) + labels[n] for n in offsets])
     for spec in todo:
         c = src.parts[spec.name]
         mesh = src.mesh[c]
-        shape = source.world_vertices(mesh)[labels_of(src, c)]
-        # a few hundred vertices tell a shape as well as all of them
-        shape = shape[:: max(1, len(shape) // 256)]
+        inside = labels_of(src, c)
+        index = np.cumsum(inside) - 1
+        part_tris = index[source.meshes[mesh].triangles[inside[source.meshes[mesh].triangles[:, 0]]]]
         ids = [fp for fp in spec.points if fp in source.points]
-        carried = feature_warp(moving, fixed, np.vstack([shape, [source.points[k] for k in ids]]))
-        t, _, d = closest_points(carried[:len(shape)], V, T, k=16)
+        carried = feature_warp(moving, fixed, np.vstack([source.world_vertices(mesh)[inside],
+                                                         [source.points[k] for k in ids]]))
+        shape, at = carried[:-len(ids)], carried[-len(ids):]
+        # a few hundred vertices tell a shape as well as all of them
+        t, _, d = closest_points(_thinned(shape), V, T, k=16)
         comps, votes = np.unique(tri_comp[t], return_counts=True)
         best = int(comps[np.argmax(votes)])
         if best in taken or np.median(d[tri_comp[t] == best]) > tol or votes.max() < len(t) / 2:
             continue
-        if spec.kind == "eye" and not is_eyeball(
-                target.world_vertices(comp_mesh[best])[labels[comp_mesh[best]]
-                                                       == _local(comp_mesh, best)], max_radius):
+        # and the other way round: the component lies on the carried part, not round it
+        # (gums and mouth cavity in one piece round a tongue or teeth)
+        if not len(part_tris) or np.median(closest_points(
+                _thinned(V[vert_comp == best]), shape, part_tris, k=16)[2]) > tol:
+            continue
+        if spec.kind == "eye" and not is_eyeball(V[vert_comp == best], max_radius):
             continue
         taken.add(best)
         own = np.flatnonzero(tri_comp == best)
-        tri, bary, _ = closest_points(carried[len(shape):], V, T[own], k=16)
+        tri, bary, _ = closest_points(at, V, T[own], k=16)
         rows = T[own][tri, np.argmax(bary, axis=1)]
         for fp, row in zip(ids, rows):
             m = names[int(np.searchsorted(firsts, row, side="right")) - 1]
             out[fp] = (m, int(row - offsets[m]))
     return out
+
+
+def _thinned(points: np.ndarray, most: int = 256) -> np.ndarray:
+    """At most about ``most`` of ``points``, evenly taken."""
+    return points[:: max(1, len(points) // most)]
 
 
 def labels_of(found: Components, component: int) -> np.ndarray:

@@ -263,6 +263,42 @@ def test_a_mouth_cavity_is_not_taken_for_teeth(source, head):
     assert carry_part_points(source, face) == {}
 
 
+def in_pieces(vertices: np.ndarray, triangles: np.ndarray, pieces: int = 8) -> tuple:
+    """The mesh cut across x into ``pieces`` connected components (teeth modelled one
+    by one), each with its own copy of its vertices."""
+    x = vertices[triangles].mean(axis=1)[:, 0]
+    bins = np.digitize(x, np.linspace(x.min(), x.max(), pieces + 1)[1:-1])
+    verts, tris, first = [], [], 0
+    for k in np.unique(bins):
+        t = triangles[bins == k]
+        used, index = np.unique(t, return_inverse=True)
+        verts.append(vertices[used])
+        tris.append(index.reshape(-1, 3) + first)
+        first += len(used)
+    return np.vstack(verts), np.vstack(tris)
+
+
+def test_teeth_one_component_per_tooth_are_found_whole(source, head):
+    pieces = [(head.world_vertices(n), head.meshes[n].triangles)
+              for n in ("Skin", *EYES, "Tongue", "Mouth")]
+    teeth = {n: in_pieces(head.world_vertices(n), head.meshes[n].triangles)
+             for n in ("UpperTeeth", "LowerTeeth")}
+    verts, tris, first = [], [], 0
+    for v, t in pieces + list(teeth.values()):
+        verts.append(v)
+        tris.append(t + first)
+        first += len(v)
+    face = FaceModel([FaceMesh("head", np.vstack(verts), np.vstack(tris))],
+                     points=FeaturePointSet({k: head.points[k] for k in REQUIRED_POINTS}))
+    assert len(np.unique(mesh_components(face.meshes["head"].triangles, first))) == 5 + 2 * 8
+    out, messages = clone_recording(source, face)
+    for name, (v, _) in teeth.items():
+        part = "head_" + name
+        assert len(out.meshes[part].vertices) == len(v)            # every tooth, nothing else
+    assert not [m for m in messages if "has no" in m]
+    assert validate(out).ok
+
+
 def test_missing_required_point_fails_before_any_work(source, skin_only):
     face = FaceModel(skin_only.meshes.values(), points=FeaturePointSet(
         {k: skin_only.points[k] for k in skin_only.points if k not in ("2.1", "9.15")}))

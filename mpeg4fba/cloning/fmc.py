@@ -67,7 +67,7 @@ from .alignment import REQUIRED_POINTS, FaceSpace, align
 from .interp2d import antialiased_weights
 from .lips import LIPS, OUTSIDE, SLITS, opposite, slit_regions
 from .checks import check_placement
-from .parts import (HEAD, PARTS, carry_part_points, find_parts, lowest_common_transform,
+from .parts import (HEAD, PARTS, find_parts, lowest_common_transform, match_parts,
                     separate_parts, source_transform, target_transform)
 from .projection import MOUTH_ANGLE
 from .rigid import axis_angle, fit_rigid, rotation_centre, sphere_centre
@@ -355,7 +355,7 @@ class FacialMotionCloner:
             check_placement(face, which)
         #: the target's part points carried over from the source (teeth and tongue given
         #: without points), id -> (mesh, vertex)
-        self.carried_points = carry_part_points(source, target)
+        matched, self.carried_points = match_parts(source, target)
         if self.carried_points:
             target = _with_points(target, self.carried_points)
             ids = point_order(self.carried_points)
@@ -365,7 +365,7 @@ class FacialMotionCloner:
                           CloneWarning, stacklevel=2)
         # eyes, teeth, tongue welded into another mesh become meshes of their own (the
         # cloned face is the target so split)
-        source, target = separate_parts(source), separate_parts(target)
+        source, target = separate_parts(source), separate_parts(target, matched)
         self.source, self.target = source, target
         self.scale_motion = bool(scale_motion)
         self.by_mesh = bool(by_mesh)

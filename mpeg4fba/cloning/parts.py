@@ -31,10 +31,12 @@ also holds the skin's feature points: an eye whose pupil lies on the skin is no 
 and the head is cloned as skin, without eyeball motion.  An eye must also be roughly
 spherical (:func:`is_eyeball`).  Why a component holds a point: it has the surface
 nearest to the point (the point's vertex tie, else the closest point of every triangle).
+Teeth and tongue are matched by shape to a source face's (:func:`match_parts`): that
+finds teeth modelled one component per tooth whole, and the points of parts given none.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from typing import Iterable, Optional
 
 import numpy as np
@@ -52,7 +54,8 @@ __all__ = ["PartSpec", "PARTS", "find_parts", "mesh_holding", "connected_meshes"
            "lowest_common_transform", "moving_transforms", "source_transform",
            "target_transform", "enclosed_meshes", "HEAD",
            "mesh_components", "is_eyeball", "EYEBALL_ROUNDNESS", "Components",
-           "part_components", "separate_parts", "carry_part_points", "labels_of"]
+           "part_components", "separate_parts", "carry_part_points", "labels_of",
+           "match_parts", "MATCHED_KINDS"]
 
 
 @dataclass(frozen=True)
@@ -180,8 +183,10 @@ class Components:
     mesh (:func:`mesh_components`); ``holder``: point id -> component; ``distance``: point
     id -> its distance from that component's surface (0 for a vertex tie); ``skin``: the
     components holding a point of the skin (neither a part's nor inside the head,
-    :data:`NOT_SURFACE`); ``parts``: part name -> its component; ``rejected``: part name
-    -> why its point's component is not that part.
+    :data:`NOT_SURFACE`); ``parts``: part name -> its component (the one holding its
+    point); ``rejected``: part name -> why its point's component is not that part;
+    ``members``: part name -> all its components, of one mesh (teeth modelled one
+    component per tooth; by default the one of ``parts``, :func:`match_parts` adds).
     """
 
     mesh: list
@@ -191,6 +196,11 @@ class Components:
     skin: set
     parts: dict
     rejected: dict
+    members: dict = field(default_factory=dict)
+
+    def __post_init__(self):
+        for part, c in self.parts.items():
+            self.members.setdefault(part, [c])
 
 
 #: Every part's identifying points (the eyes', teeth's and tongue's).
@@ -262,7 +272,9 @@ def separate_parts(face: FaceModel, components: Optional[Components] = None) -> 
     split: dict = {}                       # mesh -> [(part name, local labels)]
     for part, c in found.parts.items():
         m = found.mesh[c]
-        split.setdefault(m, []).append((part, [_local(found.mesh, c)]))
+        split.setdefault(m, []).append((part, [_local(found.mesh, k) for k in
+                                               found.members.get(part, [c])
+                                               if found.mesh[k] == m]))
     skin_meshes = {found.mesh[c] for c in found.skin}
     # a mesh that is one part and nothing else stays whole (an eyeball with its iris
     # and cornea as components of their own)
@@ -364,71 +376,117 @@ def _unique_name(base: str, taken: set) -> str:
 
 def carry_part_points(source: FaceModel, target: FaceModel) -> dict:
     """Point id -> (mesh, vertex) of the target for the points of each part the source
-    has and the target's points don't find (teeth and tongue given no points).
-
-    The source's part (its component's vertices) and points are carried over by the
-    thin-plate spline that takes the source's skin points onto the target's.  The
-    target's part is the component most of the carried vertices lie nearest to (their
-    median distance within 5 % of the target's ES0), holding no skin point nor another
-    part's, and for an eye an eyeball; each point goes to the nearest vertex of that
-    component.  Parts touch (teeth modelled clenched, the tongue behind the lower
-    teeth), so a part is told by its whole shape, not by the one component nearest a
-    point.  A target without such a part (a head without teeth, whose mouth cavity lies
-    further off) gets none.
+    has and the target's points don't find (teeth and tongue given no points), from
+    :func:`match_parts`.
 
     >>> from mpeg4fba.models import reference_head
     >>> face = reference_head(resolution=0.5)
     >>> carry_part_points(face, face)          # every part found by its own points
     {}
     """
+    return match_parts(source, target)[1]
+
+
+#: The kinds of part :func:`match_parts` matches by shape (eyes are found by their
+#: pupils and their roundness, :func:`part_components`).
+MATCHED_KINDS = ("teeth", "tongue")
+
+
+def match_parts(source: FaceModel, target: FaceModel) -> tuple:
+    """(the target's :class:`Components` with its teeth and tongue matched to the
+    source's, carried points id -> (mesh, vertex)).
+
+    Each teeth or tongue part of the source (its meshes, :func:`find_parts`) is carried
+    over by the thin-plate spline that takes the source's skin points onto the target's.
+    A target component belongs to it when it lies on the carried part and the carried
+    part on it: the median distance both ways within 5 % of the target's ES0, so a
+    mouth cavity or gums round the teeth, or the other row of clenched teeth, are not
+    taken.  The part is those components (of one mesh: the one holding the target's own
+    point, else the one most of the carried part lies on); they must hold no skin point,
+    and cover half the carried part.  A component two parts claim goes to the one it
+    lies nearer.  When the target has the part's point, its component stays in the part
+    whatever the match says; when it has none, the source's points are carried over and
+    put on the nearest vertices of the part.  A target without such a part (a head
+    without teeth, whose mouth cavity lies further off) gets none.
+    """
     src, tgt = part_components(source), part_components(target)
-    todo = [spec for spec in PARTS if spec.name in src.parts and spec.name not in tgt.parts
-            and spec.name not in tgt.rejected
-            and not any(fp in target.points for fp in spec.points)]
-    common = [k for k in source.points if k in target.points and k not in NOT_SURFACE]
     V, T, tri_comp, offsets, labels, comp_mesh = _stacked(target)
-    if not todo or len(common) < 5 or not len(T):
-        return {}
+    common = [k for k in source.points if k in target.points and k not in NOT_SURFACE]
+    specs = [spec for spec in PARTS if spec.kind in MATCHED_KINDS and spec.name in src.parts
+             and spec.name not in tgt.rejected]
+    if not specs or len(common) < 5 or not len(T):
+        return tgt, {}
     moving = np.array([source.points[k] for k in common])
     fixed = np.array([target.points[k] for k in common])
     tol = 0.05 * _scale(target)
-    fapu = target.fapu
-    max_radius = 0.5 * float(fapu.ES0) if fapu is not None and fapu.ES0 > 0 else np.inf
-    taken = set(tgt.parts.values()) | tgt.skin
-    names, firsts = list(offsets), np.array(list(offsets.values()))
-    out = {}
     vert_comp = np.concatenate([comp_mesh.index(n) + labels[n] for n in offsets])
-    for spec in todo:
-        c = src.parts[spec.name]
-        mesh = src.mesh[c]
-        inside = labels_of(src, c)
-        index = np.cumsum(inside) - 1
-        part_tris = index[source.meshes[mesh].triangles[inside[source.meshes[mesh].triangles[:, 0]]]]
+    source_meshes = find_parts(source)
+    claims: dict = {}                       # component -> [(reverse distance, part)]
+    found: dict = {}                        # part -> (members, carried points)
+    for spec in specs:
+        shape, tris = _part_shape(source, source_meshes.get(spec.name, []))
         ids = [fp for fp in spec.points if fp in source.points]
-        carried = feature_warp(moving, fixed, np.vstack([source.world_vertices(mesh)[inside],
-                                                         [source.points[k] for k in ids]]))
-        shape, at = carried[:-len(ids)], carried[-len(ids):]
-        # a few hundred vertices tell a shape as well as all of them
+        if not len(tris):
+            continue
+        carried = feature_warp(moving, fixed, np.vstack([shape, [source.points[k] for k in ids]])
+                               if ids else shape)
+        shape, at = carried[:len(shape)], carried[len(shape):]
         t, _, d = closest_points(_thinned(shape), V, T, k=16)
-        comps, votes = np.unique(tri_comp[t], return_counts=True)
-        best = int(comps[np.argmax(votes)])
-        if best in taken or np.median(d[tri_comp[t] == best]) > tol or votes.max() < len(t) / 2:
+        hit = np.where(d <= tol, tri_comp[t], -1)
+        seed = tgt.parts.get(spec.name)
+        others = {c for p, c in tgt.parts.items() if p != spec.name} | tgt.skin
+        cands = [int(c) for c in np.unique(hit[hit >= 0]) if c not in others]
+        if not cands:
             continue
-        # and the other way round: the component lies on the carried part, not round it
-        # (gums and mouth cavity in one piece round a tongue or teeth)
-        if not len(part_tris) or np.median(closest_points(
-                _thinned(V[vert_comp == best]), shape, part_tris, k=16)[2]) > tol:
+        mesh = comp_mesh[seed] if seed is not None else \
+            max({comp_mesh[c] for c in cands}, key=lambda m: np.isin(
+                hit, [c for c in cands if comp_mesh[c] == m]).sum())
+        members = {}
+        for c in cands:
+            if comp_mesh[c] != mesh:
+                continue
+            back = float(np.median(closest_points(_thinned(V[vert_comp == c]), shape, tris,
+                                                  k=16)[2]))
+            if back <= tol:
+                members[c] = back
+        if seed is None and np.isin(hit, list(members)).sum() < len(hit) / 2:
             continue
-        if spec.kind == "eye" and not is_eyeball(V[vert_comp == best], max_radius):
+        for c, back in members.items():
+            claims.setdefault(c, []).append((back, spec.name))
+        found[spec.name] = (members, seed, ids, at)
+    points, out = dict(tgt.parts), {p: list(m) for p, m in tgt.members.items()}
+    carried_ids: dict = {}
+    names, firsts = list(offsets), np.array(list(offsets.values()))
+    for part, (members, seed, ids, at) in found.items():
+        mine = [c for c in members if min(claims[c])[1] == part and c not in
+                {s for p, s in tgt.parts.items() if p != part}]
+        if seed is not None:
+            out[part] = sorted(set(mine) | {seed})
             continue
-        taken.add(best)
-        own = np.flatnonzero(tri_comp == best)
+        if not mine:
+            continue
+        own = np.flatnonzero(np.isin(tri_comp, mine))
         tri, bary, _ = closest_points(at, V, T[own], k=16)
         rows = T[own][tri, np.argmax(bary, axis=1)]
         for fp, row in zip(ids, rows):
             m = names[int(np.searchsorted(firsts, row, side="right")) - 1]
-            out[fp] = (m, int(row - offsets[m]))
-    return out
+            carried_ids[fp] = (m, int(row - offsets[m]))
+        points[part] = int(vert_comp[rows[0]])
+        out[part] = sorted(mine)
+    return Components(tgt.mesh, tgt.labels, tgt.holder, tgt.distance, tgt.skin, points,
+                      tgt.rejected, out), carried_ids
+
+
+def _part_shape(face: FaceModel, meshes: list) -> tuple:
+    """(world vertices, triangles) of ``meshes`` stacked."""
+    verts, tris, first = [], [], 0
+    for n in meshes:
+        verts.append(face.world_vertices(n))
+        tris.append(face.meshes[n].triangles + first)
+        first += len(face.meshes[n].vertices)
+    if not verts:
+        return np.zeros((0, 3)), np.zeros((0, 3), dtype=np.int64)
+    return np.vstack(verts), np.vstack(tris)
 
 
 def _thinned(points: np.ndarray, most: int = 256) -> np.ndarray:

@@ -54,7 +54,7 @@ __all__ = ["PartSpec", "PARTS", "find_parts", "mesh_holding", "connected_meshes"
            "lowest_common_transform", "moving_transforms", "source_transform",
            "target_transform", "enclosed_meshes", "HEAD",
            "mesh_components", "is_eyeball", "EYEBALL_ROUNDNESS", "Components",
-           "part_components", "separate_parts", "carry_part_points", "labels_of",
+           "part_components", "separate_parts", "carry_part_points",
            "match_parts", "MATCHED_KINDS"]
 
 
@@ -324,7 +324,7 @@ def separate_parts(face: FaceModel, components: Optional[Components] = None) -> 
         else:
             ties[fp] = (m, v)
     points = FeaturePointSet({fp: face.points[fp] for fp in face.points}, ties)
-    out = FaceModel(meshes, face.transforms.values(), points=points, fapu=face._fapu,
+    out = FaceModel(meshes, face.transforms.values(), points=points, fapu=face.fapu,
                     fat=face.fat, name=face.name)
     out.colors = colors
     # named areas are vertex indices of meshes that may just have been renumbered
@@ -492,11 +492,6 @@ def _part_shape(face: FaceModel, meshes: list) -> tuple:
 def _thinned(points: np.ndarray, most: int = 256) -> np.ndarray:
     """At most about ``most`` of ``points``, evenly taken."""
     return points[:: max(1, len(points) // most)]
-
-
-def labels_of(found: Components, component: int) -> np.ndarray:
-    """(n,) bool over the vertices of its mesh: those of ``component``."""
-    return found.labels[found.mesh[component]] == _local(found.mesh, component)
 
 
 def _stacked(face: FaceModel) -> tuple:

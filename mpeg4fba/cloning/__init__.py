@@ -9,20 +9,22 @@ Modules: :mod:`~mpeg4fba.cloning.interp2d` (interpolation from a 2D triangle mes
 anti-aliasing), :mod:`~mpeg4fba.cloning.normalise` (the normalised facial space),
 :mod:`~mpeg4fba.cloning.projection` and :mod:`~mpeg4fba.cloning.alignment` (the 2D
 alignment space), :mod:`~mpeg4fba.cloning.lips` (lip regions), :mod:`~mpeg4fba.cloning.parts`
-and :mod:`~mpeg4fba.cloning.rigid` (eyes, teeth, tongue, head), :mod:`~mpeg4fba.cloning.fmc`
+and :mod:`~mpeg4fba.cloning.rigid` (eyes, teeth, tongue, head), :mod:`~mpeg4fba.cloning.checks`
+(feature points on the mesh, in its units), :mod:`~mpeg4fba.cloning.fmc`
 (the whole method), :mod:`~mpeg4fba.cloning.local_frames` (Kong et al.'s local-frame
 cloning for faces that share a mesh).
 """
 from __future__ import annotations
 
 from .alignment import REQUIRED_POINTS, FaceSpace, align, alignment_triangles
+from .checks import PlacementError, check_placement
 from .fmc import CloneWarning, FacialMotionCloner, clone, required_points_missing
 from .local_frames import (LocalFrameCloner, LocalFrameWarning, TopologyError,
                            local_frame_clone)
 from .interp2d import antialiased_weights, interpolate, interpolation_weights
 from .lips import LOWER, OUTSIDE, SLITS, UPPER, lip_regions, slit_regions
 from .normalise import Normaliser, face_center, point_units, region_factors
-from .parts import PARTS, find_parts
+from .parts import PARTS, carry_part_points, find_parts, separate_parts
 from .projection import MOUTH_ANGLE, Projection, choose_axis, cylindrical_projection
 
 __all__ = ["clone", "FacialMotionCloner", "LocalFrameCloner", "LocalFrameWarning",
@@ -31,4 +33,5 @@ __all__ = ["clone", "FacialMotionCloner", "LocalFrameCloner", "LocalFrameWarning
            "interpolation_weights", "interpolate", "antialiased_weights",
            "lip_regions", "slit_regions", "SLITS", "UPPER", "LOWER", "OUTSIDE", "PARTS", "find_parts",
            "Normaliser", "face_center", "point_units", "region_factors",
-           "Projection", "choose_axis", "cylindrical_projection", "MOUTH_ANGLE"]
+           "Projection", "choose_axis", "cylindrical_projection", "MOUTH_ANGLE",
+           "PlacementError", "check_placement", "separate_parts", "carry_part_points"]

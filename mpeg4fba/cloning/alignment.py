@@ -40,6 +40,8 @@ import scipy.sparse as sp
 
 from ..fba.fapu import FAPU
 from ..fba.featurepoints import FeaturePointSet, point_order
+# feature points inside the mouth or the neck, useless for aligning the surface
+from ..fba.requirements import NOT_SURFACE
 from .interp2d import interpolation_weights
 from .normalise import Normaliser, face_center
 from .projection import MOUTH_ANGLE, Projection
@@ -199,7 +201,7 @@ def align(target: FaceSpace, source: FaceSpace,
     depth = target.depth + np.asarray(w @ (source.points_depth(ids) - target.points_depth(ids)))
     if refine:
         extra = [i for i in point_order(set(target.ids) & set(source.ids))
-                 if i not in ids and i not in _NOT_SURFACE
+                 if i not in ids and i not in NOT_SURFACE
                  and abs(source.point_uv(i)[0]) < _REFINE_ANGLE
                  and abs(target.point_uv(i)[0]) < _REFINE_ANGLE]
         if extra:
@@ -220,10 +222,6 @@ def align(target: FaceSpace, source: FaceSpace,
 _REFINE_ANGLE = 2.5
 
 
-#: Feature points inside the mouth or the neck, useless for aligning the surface.
-_NOT_SURFACE = {"7.1", "6.1", "6.2", "6.3", "6.4", "9.8", "9.9", "9.10", "9.11", "11.5"}
-
-
 def _triangulation(target: FaceSpace, source: FaceSpace, triangulation) -> tuple:
     if isinstance(triangulation, str):
         if triangulation == "fixed":
@@ -233,7 +231,7 @@ def _triangulation(target: FaceSpace, source: FaceSpace, triangulation) -> tuple
             return list(ids), np.asarray(tris)
         if triangulation == "delaunay":
             ids = [i for i in point_order(set(target.ids) & set(source.ids))
-                   if i not in _NOT_SURFACE]
+                   if i not in NOT_SURFACE]
             if len(ids) < 3:
                 raise ValueError("a Delaunay alignment needs at least three feature points "
                                  "on both faces")

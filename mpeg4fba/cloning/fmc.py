@@ -3,6 +3,11 @@ face onto a target face, as a FAT.
 
 The steps, each in its own module:
 
+0. Before any work: the required points (:data:`REQUIRED_POINTS`; the rest of what
+   :func:`mpeg4fba.fba.requirements.required_points` asks for is put by the cloning),
+   the points on the meshes in the meshes' units (:mod:`~mpeg4fba.cloning.checks`);
+   teeth and tongue points the target lacks carried over from the source, and parts
+   welded into another mesh split off (:mod:`~mpeg4fba.cloning.parts`).
 1. Both faces' skin (every mesh that is not an eye, teeth or tongue,
    :mod:`~mpeg4fba.cloning.parts`) go to the 2D alignment space
    (:class:`~mpeg4fba.cloning.alignment.FaceSpace`: normalised, then cylindrically
@@ -27,6 +32,10 @@ The steps, each in its own module:
    it is not rigid (a pupil dilating, a tongue curling), mapped vertex to vertex in 3D.
 6. Each target table gets the source's interval borders: the target's displacement at
    each border, differenced, gives the per-interval displacements of FaceDefMesh.
+   Tables that move nothing on the target (the eyeball FAPs of a head without
+   eyeballs) are left out, with one warning per missing part; skin points the
+   target lacks and its FAPs need (the ears') are put where the mapping places the
+   source's (:meth:`FacialMotionCloner.derive_points`).
 
 Example
 -------
@@ -51,13 +60,15 @@ from scipy.spatial import cKDTree
 
 from ..fba.face import FaceModel, FaceTransform
 from ..fba.fat import FAT, FaceDefMesh, FaceDefTable, FaceDefTransform, interval_weights
-from ..fba.featurepoints import FeaturePointError, point_order
+from ..fba.featurepoints import FeaturePointError, FeaturePointSet, point_order
+from ..fba.requirements import NOT_SURFACE, fap_points, required_points
 from ..fba.stream import FapStream
-from .alignment import _NOT_SURFACE, REQUIRED_POINTS, FaceSpace, align
+from .alignment import REQUIRED_POINTS, FaceSpace, align
 from .interp2d import antialiased_weights
 from .lips import LIPS, OUTSIDE, SLITS, opposite, slit_regions
-from .parts import (HEAD, PARTS, find_parts, lowest_common_transform, source_transform,
-                    target_transform)
+from .checks import check_placement
+from .parts import (HEAD, PARTS, find_parts, lowest_common_transform, match_parts,
+                    separate_parts, source_transform, target_transform)
 from .projection import MOUTH_ANGLE
 from .rigid import axis_angle, fit_rigid, rotation_centre, sphere_centre
 from .surface import (REGISTRATION_FINE_SCALES, REGISTRATION_MEMBRANE, closest_points,
@@ -218,6 +229,37 @@ FACING_RESOLUTION = 2.0
 LOOSE_PIN_RESOLUTION = 2.0
 
 
+#: How near (normalised space, eye separation 1) the mapping must place some target skin
+#: vertex to a source feature point for that vertex to become the target's point when
+#: the target lacks it (:meth:`FacialMotionCloner.derive_points`): 0.05 is 3 mm on a
+#: human face, a few of the target's edges.  Too small: a coarse target gets no ear
+#: points and loses the ear FAPs (with a warning); too large: a head without ears gets
+#: ear points on its cheek, and ear FAPs that move the cheek.
+DERIVE_DISTANCE = 0.05
+
+
+def _runs(numbers) -> str:
+    """Sorted integers as runs: ``_runs([23, 24, 25, 43]) == "23-25, 43"``."""
+    out, run = [], []
+    for n in sorted(set(numbers)):
+        if run and n != run[-1] + 1:
+            out.append(f"{run[0]}-{run[-1]}" if len(run) > 2 else ", ".join(map(str, run)))
+            run = []
+        run.append(n)
+    if run:
+        out.append(f"{run[0]}-{run[-1]}" if len(run) > 2 else ", ".join(map(str, run)))
+    return ", ".join(out)
+
+
+def _no_point(part: str, face: FaceModel) -> str:
+    """Why ``face`` has no ``part`` when no component was refused."""
+    ids = _SPEC[part].points
+    if any(fp in face.points for fp in ids):
+        return f"no mesh of its own at its point {' or '.join(ids)}"
+    return (f"no point {' or '.join(ids)} given, and no mesh shaped like the source's "
+            "where it would be")
+
+
 class CloneWarning(UserWarning):
     """Something of the source's motion could not be carried to the target."""
 
@@ -237,8 +279,9 @@ def _check_faces(source: FaceModel, target: FaceModel) -> None:
                             f"{'s' if len(missing) > 1 else ''} {', '.join(missing)}")
     if problems:
         raise FeaturePointError("facial motion cloning needs the feature points of the "
-                                "alignment triangulation and 7.1: " + "; ".join(problems),
-                                point_order(ids))
+                                "alignment triangulation and 7.1 (REQUIRED_POINTS, listed in "
+                                "the README's 'The feature points a face needs'): "
+                                + "; ".join(problems), point_order(ids))
     for face, which in ((source, "source"), (target, "target")):
         if face.fapu is None:
             raise ValueError(f"the {which} face ({face.name}) has no usable FAPU")
@@ -308,6 +351,21 @@ class FacialMotionCloner:
         if overlap not in OVERLAP_RULES:
             raise ValueError(f"overlap must be one of {OVERLAP_RULES}, not {overlap!r}")
         self.overlap = overlap
+        for face, which in ((source, "source"), (target, "target")):
+            check_placement(face, which)
+        #: the target's part points carried over from the source (teeth and tongue given
+        #: without points), id -> (mesh, vertex)
+        matched, self.carried_points = match_parts(source, target)
+        if self.carried_points:
+            target = _with_points(target, self.carried_points)
+            ids = point_order(self.carried_points)
+            warnings.warn(f"the target's feature point{'s' if len(ids) > 1 else ''} "
+                          f"{', '.join(ids)} (its teeth, tongue) were carried over from the "
+                          "source's by its other points; give them to place them yourself",
+                          CloneWarning, stacklevel=2)
+        # eyes, teeth, tongue welded into another mesh become meshes of their own (the
+        # cloned face is the target so split)
+        source, target = separate_parts(source), separate_parts(target, matched)
         self.source, self.target = source, target
         self.scale_motion = bool(scale_motion)
         self.by_mesh = bool(by_mesh)
@@ -316,11 +374,16 @@ class FacialMotionCloner:
         self.source_parts = find_parts(source)
         # the Transform carrying each source part's motion (None: its meshes move alone)
         self.source_transforms = {p: source_transform(source, m) for p, m in self.source_parts.items()}
-        self.target_parts = find_parts(target)
+        #: part name -> why the target has no such part (for the warning)
+        self.target_missing_parts: dict = {}
+        self.target_parts = find_parts(target, self.target_missing_parts)
         self.src = _Skin(source, self.source_parts, positions, mouth_angle)
         self.tgt = _Skin(target, self.target_parts, positions, mouth_angle)
-        if not len(self.src.vertices) or not len(self.tgt.vertices):
-            raise ValueError("both faces need skin meshes (meshes other than eyes, teeth, tongue)")
+        for skin, face, which in ((self.src, source, "source"), (self.tgt, target, "target")):
+            if not len(skin.vertices):
+                raise ValueError(f"the {which} face ({face.name}) has no skin: all its meshes "
+                                 "were taken for eyes, teeth or tongue, by the feature points "
+                                 "3.5, 3.6, 9.8-9.11 and 6.1-6.4 they hold")
         if alignment not in ALIGNMENTS:
             raise ValueError(f"alignment must be one of {ALIGNMENTS}, not {alignment!r}")
         self.alignment = alignment
@@ -478,7 +541,7 @@ class FacialMotionCloner:
         """The "surface" refinement of the alignment (see :data:`ALIGNMENTS`)."""
         src, tgt = self.src.space, self.tgt.space
         common = [i for i in point_order(set(tgt.ids) & set(src.ids))
-                  if i not in _NOT_SURFACE or i == "7.1"]
+                  if i not in NOT_SURFACE or i == "7.1"]
         moving = tgt.normalise(np.array([self.target.points[i] for i in common]))
         fixed = src.normalise(np.array([self.source.points[i] for i in common]))
         warped = feature_warp(moving, fixed, self.tgt.normalised)
@@ -684,11 +747,99 @@ class FacialMotionCloner:
             transforms = self._part_transforms(table, b, installer) + installer.extra
             installer.extra = []
             new_tables.append(FaceDefTable(table.fap, meshes, transforms, table.select))
+        out.points = self.output_points
+        dropped = {}
         for t in new_tables:
-            out.fat.add(t)
+            lacking = out.points.missing(fap_points([t.fap]))
+            if not t.meshes and not t.transforms:
+                # moves nothing (the target lacks what it moved, said by the part notes):
+                # it would only ask for its feature point
+                continue
+            if lacking:
+                dropped.setdefault(tuple(lacking), []).append(t.fap)
+            else:
+                out.fat.add(t)
         out.invalidate()
-        for message in installer.notes:
+        for message in installer.notes + self._skip_notes(installer.skipped, out.fat):
             warnings.warn(message, CloneWarning, stacklevel=2)
+        for lacking, faps in dropped.items():
+            warnings.warn(f"the target lacks feature point{'s' if len(lacking) > 1 else ''} "
+                          f"{', '.join(lacking)} and the mapping can't put "
+                          f"{'them' if len(lacking) > 1 else 'it'} (the source has "
+                          f"{'them' if len(lacking) > 1 else 'it'} nowhere the target's skin "
+                          f"maps to, or not at all): FAP{'s' if len(faps) > 1 else ''} "
+                          f"{_runs(faps)} not cloned", CloneWarning, stacklevel=2)
+        return out
+
+    def _skip_notes(self, skipped: dict, fat: FAT) -> list:
+        """One message per kind of part the target lacks (eyeballs, teeth, tongue): why,
+        and which of the source's tables lost that motion or were left out."""
+        out = []
+        kinds = {"eye": "eyeballs", "teeth": "teeth", "tongue": "tongue"}
+        for kind, label in kinds.items():
+            parts = [p for p in skipped if p in _SPEC and _SPEC[p].kind == kind]
+            if not parts:
+                continue
+            keys = set().union(*(skipped[p] for p in parts))
+            gone = sorted(f for f, sel in keys if f > 2 and f not in fat.faps)
+            kept = sorted(f for f, sel in keys if f > 2 and f in fat.faps)
+            high = sorted({"visemes" if f == 1 else "expressions" for f, _ in keys if f <= 2})
+            why = "; ".join((f"{p}: " if len(parts) > 1 else "")
+                            + self.target_missing_parts.get(p, _no_point(p, self.target)) for p in parts)
+            text = f"the target has no {' or '.join(parts) if kind == 'teeth' else label} ({why})"
+            if gone:
+                text += f"; FAP{'s' if len(gone) > 1 else ''} {_runs(gone)} not cloned"
+            if kept or high:
+                text += "; cloned without its motion: " + ", ".join(
+                    ([f"FAP{'s' if len(kept) > 1 else ''} {_runs(kept)}"] if kept else []) + high)
+            out.append(text)
+        return out
+
+    @cached_property
+    def output_points(self) -> FeaturePointSet:
+        """The target's feature points plus those the source's FAPs need that the target
+        lacks and the mapping can put (:meth:`derive_points`)."""
+        need = required_points(self.source.fat.faps, parts=self._target_kinds(), fapu=True,
+                               base=REQUIRED_POINTS)
+        missing = self.target.points.missing(need)
+        if not missing:
+            return self.target.points
+        found = self.derive_points(missing)
+        if not found:
+            return self.target.points
+        positions = {k: self.target.points[k] for k in self.target.points}
+        ties = dict(self.target.points.vertices)
+        for k, (mesh, vertex) in found.items():
+            positions[k] = self.target.world_vertices(mesh)[vertex]
+            ties[k] = (mesh, vertex)
+        return FeaturePointSet(positions, ties)
+
+    def _target_kinds(self) -> list:
+        return sorted({_SPEC[p].kind for p in self.target_parts if p in _SPEC})
+
+    def derive_points(self, ids: Sequence[str]) -> dict:
+        """Point id -> (target skin mesh, vertex) for those of ``ids`` the source has on
+        its skin: the target vertex the mapping places nearest the source's point, when
+        it is placed within :data:`DERIVE_DISTANCE` of it (else the target has no such
+        place, a face without ears, and the point stays missing)."""
+        src = self.src
+        wanted = [k for k in ids if k in self.source.points and k not in NOT_SURFACE]
+        if not wanted or not len(self.tgt.vertices):
+            return {}
+        placed = self.surface_points if self.surface_points is not None else \
+            np.asarray(self.weights @ src.normalised)
+        at = src.space.normalise(np.array([self.source.points[k] for k in wanted]))
+        # the nearest point of the target's skin as the mapping placed it, and of its
+        # triangle the corner nearest to it
+        tri, bary, dist = closest_points(at, placed, self.tgt.triangles, k=16)
+        row = self.tgt.triangles[tri, np.argmax(bary, axis=1)]
+        names = list(self.tgt.offsets)
+        out = {}
+        for k, d, r in zip(wanted, dist, row):
+            if d > DERIVE_DISTANCE:
+                continue
+            mesh = names[int(self.tgt.mesh_index[r])]
+            out[k] = (mesh, int(r - self.tgt.offsets[mesh][0]))
         return out
 
     def _skin_columns(self, tables: list, borders: list) -> sp.csr_matrix:
@@ -782,9 +933,7 @@ class FacialMotionCloner:
             if part != HEAD and ts == self.source_transforms[HEAD]:
                 continue  # the head's transform moves this part; it is mapped as the head's
             if part not in self.target_parts:
-                inst.note(f"the target has no {part} (no mesh holds feature point "
-                          f"{' or '.join(_SPEC[part].points) if part in _SPEC else '-'}); "
-                          f"FAP {table.fap}'s motion of it is not cloned")
+                inst.skip(part, table)
                 continue
             pivot = self._source_pivot(part, ts)
             tt = inst.transform(part, self._target_centre(part, pivot))
@@ -850,8 +999,7 @@ class FacialMotionCloner:
             if not entries:
                 continue
             if part not in self.target_parts:
-                inst.note(f"the target has no {part}; the motion of {part} meshes by "
-                          f"FAP {table.fap} is not cloned")
+                inst.skip(part, table)
                 continue
             x, offsets = _stack(self.source, meshes)
             motion = np.zeros((len(x), len(nz), 3))
@@ -1004,11 +1152,18 @@ class _Installer:
         self.chosen: dict = {}
         self.notes: list = []
         self.extra: list = []
+        #: part name -> tables (fap, select) whose motion of it the target can't take
+        self.skipped: dict = {}
         self._tol = 0.02 * float(cloner.target.fapu.ES0)
 
     def note(self, message: str) -> None:
         if message not in self.notes:
             self.notes.append(message)
+
+    def skip(self, part: str, table: FaceDefTable) -> None:
+        """Record that ``table`` moves ``part``, which the target lacks (one warning per
+        kind of part at the end, :meth:`FacialMotionCloner.clone`)."""
+        self.skipped.setdefault(part, set()).add((table.fap, table.select))
 
     def transform(self, part: str, centre: Optional[np.ndarray]) -> str:
         if part in self.chosen:
@@ -1154,6 +1309,19 @@ def _play_table(face: FaceModel, table: FaceDefTable, value: float):
     else:
         s = FapStream.from_values({table.fap: [value]}, fps=1, n_frames=1)
     return solo.play(s)
+
+
+def _with_points(face: FaceModel, ties: dict) -> FaceModel:
+    """A copy of ``face`` sharing its meshes, with the points ``ties`` (id -> (mesh,
+    vertex)) added."""
+    out = _copy_face(face, share=True)
+    positions = {k: face.points[k] for k in face.points}
+    vertices = dict(face.points.vertices)
+    for k, (mesh, vertex) in ties.items():
+        positions[k] = face.world_vertices(mesh)[vertex]
+        vertices[k] = (mesh, vertex)
+    out.points = FeaturePointSet(positions, vertices)
+    return out
 
 
 def _copy_face(face: FaceModel, share: bool = False) -> FaceModel:

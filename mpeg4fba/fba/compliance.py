@@ -29,7 +29,8 @@ import numpy as np
 from .._location import where_text
 from .face import FaceModel
 from .fapu import FAPU
-from .tables import FAP, FEATURE_POINTS
+from .requirements import required_points
+from .tables import FAP
 
 __all__ = ["Rule", "RULES", "Finding", "Report", "check_fat", "check_fap_ratios",
            "fap_ratios", "TEST_VALUE"]
@@ -192,10 +193,8 @@ def check_fat(face: FaceModel) -> list:
             if t.transform not in face.transforms:
                 out.append(Finding("FBA010", f"FAP {table.fap}: FaceDefTransform drives "
                                    f"{t.transform!r}, which is not a Transform of the face", **at))
-    # Feature points the FAT's FAPs need, and the FAPU.
-    needed = sorted({fp for t in face.fat if 3 <= t.fap <= 68 for fp in FAP[t.fap].feature_points},
-                    key=lambda fp: [fp_.id for fp_ in FEATURE_POINTS].index(fp))
-    missing = [fp for fp in needed if fp not in face.points]
+    # Feature points the FAT's FAPs need (the list cloning checks too), and the FAPU.
+    missing = face.points.missing(required_points(face.fat.faps))
     src = {"path": (getattr(face, "source", None) or {}).get("path")}
     if missing:
         out.append(Finding("FBA002", f"feature point{'s' if len(missing) > 1 else ''} "

@@ -59,11 +59,11 @@ def test_alternating_comment_and_blank_runs():
 
 def test_blank_runs_inside_number_lists():
     numbers = "".join(f" {i} # c\n ,\t" for i in range(N // 4 // 3 * 3))
-    text = (HEADER + "PointSet { coord Coordinate { point [" + numbers + "]" + blanks() + "} }"
+    text = (HEADER + "Shape { geometry PointSet { coord Coordinate { point [" + numbers + "]" + blanks() + "} } }"
             + blanks())
     with alarm():
         scene = vrml.loads(text)
-    assert scene.nodes[0]["coord"]["point"].shape == (N // 4 // 3, 3)
+    assert scene.nodes[0]["geometry"]["coord"]["point"].shape == (N // 4 // 3, 3)
 
 
 def test_comment_lines_without_newline_at_the_end():

@@ -43,7 +43,7 @@ Example
 >>> es = np.linalg.norm(head.points["3.5"] - head.points["3.6"])
 >>> bool(np.linalg.norm(found.points["9.3"] - head.points["9.3"]) < 0.03 * es)
 True
->>> round(found.scale, 4), found.up.round(1).tolist(), found.forward.round(1).tolist()
+>>> round(found.scale, 4), (found.up.round(1) + 0.0).tolist(), (found.forward.round(1) + 0.0).tolist()
 (0.001, [0.0, 1.0, 0.0], [0.0, 0.0, 1.0])
 """
 from __future__ import annotations
@@ -258,25 +258,23 @@ def _opening_landmarks(V: np.ndarray, edge: np.ndarray, centre: np.ndarray,
 
 
 def _menton(V: np.ndarray, T: np.ndarray, pts: dict) -> np.ndarray:
-    """2.1 by the menton rule on a skin in the head frame (x left, y up, z forward): on the
-    mid-plane profile below the lower lip (8.2), the point whose normal points 45 degrees
-    between forward and down; ``pts`` needs 8.2 and 2.10 (or 8.2 alone)."""
+    """2.1 by the menton rule on a skin in the head frame (x left, y up, z forward, eye
+    separations): on the mid-plane profile below the lower lip (8.2 in ``pts``), the
+    lowest point whose normal points within about 20 degrees of 45 degrees between
+    forward and down, of those no more than 0.6 behind the chin's most forward point (so
+    the chin, not the lower lip's underside above it nor the throat behind it)."""
     N = vertex_normals(V, T)
     lip = pts["8.2"]
-    width = 0.04
-    near = np.flatnonzero((np.abs(V[:, 0] - lip[0]) < width) & (V[:, 1] < lip[1])
-                          & (V[:, 2] > lip[2] - 0.9) & (N[:, 2] > -0.2))
-    if not len(near):
+    band = np.flatnonzero((np.abs(V[:, 0] - lip[0]) < 0.05) & (V[:, 1] < lip[1] - 0.2)
+                          & (V[:, 1] > lip[1] - 1.2) & (V[:, 2] > lip[2] - 1.0))
+    if not len(band):
         return pts.get("2.1", lip)
+    front = V[band, 2].max()
     want = np.array([0.0, -np.sqrt(0.5), np.sqrt(0.5)])
-    # the first 45-degree point below the lip: take the most forward candidates with a
-    # normal close to 45 degrees, then the highest of them (the chin, not the neck)
-    score = N[near] @ want
-    good = near[score > 0.97]
+    good = band[(N[band] @ want > 0.93) & (V[band, 2] > front - 0.6)]
     if not len(good):
-        good = near[np.argsort(-score)[:3]]
-    # chin, not throat: of those, the most forward
-    return V[good[np.argmax(V[good, 2])]]
+        return pts.get("2.1", lip)
+    return V[good[np.argmin(V[good, 1])]]
 
 
 # -- pieces --------------------------------------------------------------------------------
@@ -520,7 +518,7 @@ def find_feature_points(face: FaceModel, *, ids: Optional[Iterable[str]] = None)
     idx = np.array([tpl.skin_index[k] for k in skin_points])
     tri, bary, dist = closest_points(X[idx], Vt, ST)
     q = np.einsum("nk,nkc->nc", bary, Vt[ST[tri]])
-    corner = ST[tri, np.argmax(bary, axis=1)]
+    corner = cKDTree(Vt).query(q)[1]
     # registration residual near each point: the mean distance of the deformed template's
     # vertices within 0.1 ES of it to the target
     near_d = cKDTree(Vt).query(X)[0]
@@ -588,8 +586,24 @@ def _register(tpl: _Template, Vt: np.ndarray, ST: np.ndarray) -> np.ndarray:
 
 
 def _refine(Vt, ST, pos, tie, skin_ids, reasons) -> set:
-    """Move the crisp points onto the crisp geometry near them; the ids moved."""
-    return set()
+    """Move the crisp points onto the crisp geometry near them (template frame); the ids
+    moved.  Nose tip 9.3: the most forward vertex within 0.25 ES of where the registration
+    put it; chin 2.1: the menton rule (module docstring) on the target's skin."""
+    done = set()
+    near = np.flatnonzero(np.linalg.norm(Vt - pos["9.3"], axis=1) < 0.25)
+    if len(near):
+        v = near[np.argmax(Vt[near, 2])]
+        pos["9.3"], tie["9.3"] = Vt[v], skin_ids[v]
+        done.add("9.3")
+    if "8.2" in pos:
+        m = _menton(Vt, ST, {"8.2": pos["8.2"], "2.1": pos["2.1"]})
+        if np.linalg.norm(m - pos["2.1"]) < 0.5:
+            v = int(np.argmin(np.linalg.norm(Vt - m, axis=1)))
+            pos["2.1"], tie["2.1"] = Vt[v], skin_ids[v]
+            done.add("2.1")
+        else:
+            reasons["2.1"] = "no clear chin (menton) below the lower lip: left where the fit put it"
+    return done
 
 
 def _parts(pieces: _Pieces, s, R, t, X, tpl: _Template, pos, tie, reasons) -> set:

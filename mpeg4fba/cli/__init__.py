@@ -168,6 +168,6 @@ def verbose(ctx: Optional[click.Context] = None) -> bool:
     return False
 
 
-from . import clone, convert, demo, info, play, render, validate  # noqa: E402  (the subcommands register themselves)
+from . import clone, convert, demo, info, play, points, render, validate  # noqa: E402  (the subcommands register themselves)
 
 __all__ += ["info", "convert", "validate"]

@@ -30,7 +30,36 @@ import click
 from . import main, warnings_to_stderr
 from .common import check_output, run_steps
 
-__all__ = ["clone_command"]
+__all__ = ["clone_command", "found_points_path"]
+
+
+def found_points_path(output: str) -> str:
+    """Where ``clone`` writes the points it found on the target: beside the output.
+
+    >>> found_points_path("out/head_animated.wrl.gz")
+    'out/head_animated.points.json'
+    """
+    stem = output
+    for suffix in (".gz", ".wrz", ".wrl", ".glb", ".gltf"):
+        if stem.lower().endswith(suffix):
+            stem = stem[: -len(suffix)]
+    return stem + ".points.json"
+
+
+def _say_points(report, target: str, where: str) -> None:
+    """One line per thing done to the target's points (none when they were all given)."""
+    import os
+
+    for k, d in sorted(report.snapped.items(), key=lambda kv: -kv[1])[:1]:
+        click.echo(f"snapped {len(report.snapped)} crisp points onto the target's geometry "
+                   f"(farthest {k}, moved {d:.3g} model units)")
+    if report.added:
+        worst, conf = report.lowest()
+        name = os.path.basename(target)
+        how = (f"no feature points given: found {len(report.added)}" if not report.kept else
+               f"{len(report.kept)} feature points given: found the {len(report.added)} missing")
+        click.echo(f"{name}: {how} on its geometry (lowest confidence {conf:.2f}: {worst}); "
+                   f"wrote them to {where} (review: mpeg4fba points {target} --points {where} --edit)")
 
 
 @main.command("clone", epilog="\b\nExamples:\n  mpeg4fba clone target.wrl -o animated.wrl"
@@ -52,10 +81,13 @@ __all__ = ["clone_command"]
               help="fmc: Facial Motion Cloning (any two faces); local-frames: Kong et al.'s "
                    "local frames (faces that share a mesh).")
 @click.option("--lenient", is_flag=True, help="Read VRML leniently (unknown nodes kept, with a warning).")
+@click.option("--snap", is_flag=True,
+              help="Move the crisp points of --target-points (lip and eye corners, mid-lip, nose "
+                   "tip, chin, ...) onto the target's geometry before cloning.")
 @click.option("--no-check", is_flag=True, help="Skip validating the result.")
 def clone_command(faces: tuple, output: str, source_points: Optional[str], target_points: Optional[str],
                   support: float, no_scale: bool, positions: str, triangulation: str, method: str,
-                  lenient: bool, no_check: bool) -> None:
+                  lenient: bool, snap: bool, no_check: bool) -> None:
     """Clone the facial motion of SOURCE (default: the reference head) onto TARGET."""
     from ..formats.face_files import VRML_SUFFIXES
 
@@ -63,11 +95,16 @@ def clone_command(faces: tuple, output: str, source_points: Optional[str], targe
         raise click.UsageError(f"give [SOURCE] TARGET (got {len(faces)} files)")
     if len(faces) == 1 and source_points:
         raise click.UsageError("--source-points needs a SOURCE file")
+    if snap and not target_points:
+        raise click.UsageError("--snap moves the points of --target-points: give that file")
     # before the 10-20 seconds of work: a bad output is found now, not at the end
     check_output(output, [(faces[0], "SOURCE") if len(faces) == 2 else None,
                           (faces[-1], "TARGET"), (source_points, "--source-points"),
                           (target_points, "--target-points")],
                  suffixes=VRML_SUFFIXES + (".glb", ".gltf"), what="a face")
+    points_out = found_points_path(output)
+    check_output(points_out, [(f, "a face") for f in faces] + [(output, "-o")],
+                 suffixes=(".json",), what="the found points")
     state: dict = {}
     times: dict = {}
 
@@ -82,6 +119,19 @@ def clone_command(faces: tuple, output: str, source_points: Optional[str], targe
         if not len(state["source"].fat):
             raise click.ClickException(f"the source face {state['source'].name} has no FAT: "
                                        "nothing to clone")
+
+    def points() -> None:
+        # a head without (all) the points cloning needs gets them from its geometry
+        from ..cloning.autopoints import complete_points
+        state["points"] = complete_points(state["target"], snap=snap)
+        if state["points"].added:
+            from ..fba.featurepoints import FeaturePointSet
+            from ..formats.fpjson import write_feature_points_json
+            target = state["target"]
+            conf = state["points"].found.confidence
+            write_feature_points_json(FeaturePointSet({k: target.points[k] for k in target.points}),
+                                      points_out, confidences={k: conf[k] for k in state["points"].added
+                                                               if k in conf})
 
     def mapping() -> None:
         source, target = state["source"], state["target"]
@@ -105,13 +155,15 @@ def clone_command(faces: tuple, output: str, source_points: Optional[str], targe
         from ..formats.wrl_face import save_face
         save_face(state["result"], output)
 
-    steps = [("reading the faces", read), ("mapping the faces", mapping),
+    steps = [("reading the faces", read), ("finding feature points", points),
+             ("mapping the faces", mapping),
              ("cloning the tables", tables)]
     steps += [] if no_check else [("checking the result", check)]
     steps.append(("writing", write))
     with warnings_to_stderr():
         run_steps(steps, "mpeg4fba clone", times)
     source, target, result = state["source"], state["target"], state["result"]
+    _say_points(state["points"], faces[-1], points_out)
     fat = result.fat
     click.echo(f"cloned {source.name} onto {target.name}: {len(fat.faps)} FAPs, "
                f"{len(fat.visemes)} visemes, {len(fat.expressions)} expressions "

@@ -1,0 +1,85 @@
+"""Give a face the feature points cloning needs: the ones it has, as given, and the
+rest found on its geometry (:func:`~mpeg4fba.cloning.detect.find_feature_points`).
+
+:func:`complete_points` is what ``mpeg4fba clone`` does with a target: a face with no
+points gets every point the geometry has; a face with some keeps them and gets the
+missing required ones; with ``snap=True`` its crisp given points (lip corners, eye
+corners, nose tip, ...) are moved onto the geometry near them first.
+
+>>> from mpeg4fba.models import reference_head
+>>> from mpeg4fba.fba import FeaturePointSet
+>>> face = reference_head(resolution=0.5)
+>>> given = {k: face.points[k] for k in list(face.points)[:10]}
+>>> face.points = FeaturePointSet(given)
+>>> report = complete_points(face)
+>>> report.kept == tuple(given), len(face.points) > 52, report.found is not None
+(True, True, True)
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Iterable, Optional
+
+import numpy as np
+
+from ..fba.face import FaceModel
+from ..fba.featurepoints import FeaturePointSet, point_order
+from .alignment import REQUIRED_POINTS
+from .detect import CRISP_POINTS, FoundPoints, find_feature_points, snap_points
+
+__all__ = ["PointReport", "complete_points"]
+
+
+@dataclass(frozen=True)
+class PointReport:
+    """What :func:`complete_points` did: ``kept`` the given points used as given,
+    ``added`` the ones found on the geometry, ``snapped`` given point -> distance moved
+    (model units), ``found`` the detector's result (None when nothing was needed)."""
+
+    kept: tuple = ()
+    added: tuple = ()
+    snapped: dict = field(default_factory=dict)
+    found: Optional[FoundPoints] = None
+
+    def lowest(self) -> Optional[tuple]:
+        """(id, confidence) of the least confident added point, or None."""
+        if self.found is None or not self.added:
+            return None
+        conf = self.found.confidence
+        worst = min(self.added, key=lambda k: conf.get(k, 0.0))
+        return worst, float(conf.get(worst, 0.0))
+
+
+def complete_points(face: FaceModel, *, required: Iterable[str] = REQUIRED_POINTS,
+                    snap: bool = False) -> PointReport:
+    """Give ``face`` (in place) the points it lacks of ``required``, found on its
+    geometry; a face with no points at all gets every point found.  Given points stay
+    as given, unless ``snap`` moves the crisp ones onto the geometry.  Raises
+    :class:`~mpeg4fba.cloning.detect.FaceNotFoundError` when points are needed and the
+    mesh does not look like a face."""
+    given = face.points
+    snapped: dict = {}
+    if snap and len(given):
+        crisp = [k for k in CRISP_POINTS if k in given]
+        if crisp:
+            given, moved = snap_points(face, given, ids=crisp)
+            snapped = {k: float(d) for k, d in moved.items()}
+    missing = given.missing(required)
+    if not missing:
+        face.points = given
+        return PointReport(kept=tuple(given), snapped=snapped)
+    found = find_feature_points(face)
+    take = set(found.points) if not len(given) else set(missing) & set(found.points)
+    positions = {k: given[k] for k in given}
+    vertices = {k: v for k, v in given.vertices.items() if k in positions}
+    for k in take:
+        positions[k] = np.asarray(found.points[k], float)
+        ref = found.points.vertex(k)
+        if ref is not None and k not in vertices:
+            vertices[k] = ref
+    # positions are exact; a vertex ref only names the nearest vertex, so it is kept
+    # out of the set (a reader would move the point onto that vertex)
+    face.points = FeaturePointSet(positions, {k: v for k, v in vertices.items()
+                                              if k in given.vertices})
+    return PointReport(kept=tuple(given), added=tuple(point_order(take)), snapped=snapped,
+                       found=found)

@@ -11,7 +11,8 @@ anti-aliasing), :mod:`~mpeg4fba.cloning.normalise` (the normalised facial space)
 alignment space), :mod:`~mpeg4fba.cloning.lips` (lip regions), :mod:`~mpeg4fba.cloning.parts`
 and :mod:`~mpeg4fba.cloning.rigid` (eyes, teeth, tongue, head), :mod:`~mpeg4fba.cloning.checks`
 (feature points on the mesh, in its units), :mod:`~mpeg4fba.cloning.detect` (feature
-points found on a head that has none), :mod:`~mpeg4fba.cloning.fmc`
+points found on a head that has none; :mod:`~mpeg4fba.cloning.autopoints` gives a face
+the ones it lacks), :mod:`~mpeg4fba.cloning.fmc`
 (the whole method), :mod:`~mpeg4fba.cloning.local_frames` (Kong et al.'s local-frame
 cloning for faces that share a mesh).
 """
@@ -19,6 +20,7 @@ from __future__ import annotations
 
 from .alignment import REQUIRED_POINTS, FaceSpace, align, alignment_triangles
 from .checks import PlacementError, check_placement
+from .autopoints import PointReport, complete_points
 from .detect import (CRISP_POINTS, FaceNotFoundError, FoundPoints, find_feature_points,
                      snap_points)
 from .fmc import CloneWarning, FacialMotionCloner, clone, required_points_missing
@@ -39,4 +41,4 @@ __all__ = ["clone", "FacialMotionCloner", "LocalFrameCloner", "LocalFrameWarning
            "Projection", "choose_axis", "cylindrical_projection", "MOUTH_ANGLE",
            "PlacementError", "check_placement", "separate_parts", "carry_part_points",
            "find_feature_points", "FoundPoints", "FaceNotFoundError", "snap_points",
-           "CRISP_POINTS"]
+           "CRISP_POINTS", "complete_points", "PointReport"]

@@ -225,7 +225,9 @@ html,body{margin:0;height:100%;overflow:hidden;background:#8e9196;color:#e8e8e8;
 #labels.off .lab:not(.sel){display:none}
 #title{position:fixed;top:8px;left:12px;font-size:15px;font-weight:600;color:#fff;text-shadow:0 1px 2px #0009;pointer-events:none}
 #status{position:fixed;left:12px;bottom:10px;right:352px;padding:5px 9px;border-radius:5px;background:#1e2024d0;pointer-events:none}
-#panel{position:fixed;top:0;right:0;bottom:0;width:340px;box-sizing:border-box;overflow:auto;padding:8px 10px;background:#1e2024}
+#panel{position:fixed;top:0;right:0;bottom:0;width:340px;box-sizing:border-box;display:flex;flex-direction:column;padding:8px 10px;background:#1e2024}
+#missing{max-height:30vh;overflow:auto;flex:none}
+#tablebox{flex:1;min-height:120px;overflow:auto}
 #panel h2{margin:10px 0 4px;font-size:11px;font-weight:600;letter-spacing:.06em;text-transform:uppercase;color:#aab}
 #legend .bar{height:10px;border-radius:3px;background:linear-gradient(to right,hsl(0,80%,45%),hsl(60,80%,45%),hsl(120,80%,45%))}
 #legend .ends{display:flex;justify-content:space-between;font-size:11px;color:#ccd}
@@ -239,7 +241,7 @@ button#save{background:#2f6fb3}
 #missing .placed{text-decoration:line-through;color:#889}
 .none{color:#889}
 table{width:100%;border-collapse:collapse;font-size:12px}
-th{position:sticky;top:-8px;background:#1e2024;text-align:left;font-weight:600;color:#aab}
+th{position:sticky;top:0;background:#1e2024;text-align:left;font-weight:600;color:#aab}
 td,th{padding:2px 4px;white-space:nowrap}
 tbody tr{cursor:pointer}
 tbody tr:hover,#missing div:hover{background:#2c2f35}
@@ -267,7 +269,7 @@ label{font-size:12px;color:#ccd}
 <h2 id="missinghead">Missing required points</h2>
 <div id="missing"></div>
 <h2 id="pointshead">Points</h2>
-<table><thead><tr><th>id</th><th>on</th><th class="num">conf.</th><th>note</th></tr></thead><tbody id="rows"></tbody></table>
+<div id="tablebox"><table><thead><tr><th>id</th><th>on</th><th class="num">conf.</th><th>note</th></tr></thead><tbody id="rows"></tbody></table></div>
 </div>
 <div id="msg">Loading the face...
 (this page needs JavaScript, ES modules and import maps)</div>
@@ -467,7 +469,8 @@ async function main() {
   resize();
   const vfov = THREE.MathUtils.degToRad(camera.fov);
   const hfov = 2 * Math.atan(Math.tan(vfov / 2) * camera.aspect);
-  const distance = 1.05 * radius / Math.sin(Math.min(vfov, hfov) / 2);
+  const extent = box.getSize(new THREE.Vector3());          // the front of the box fills the view
+  const distance = 1.12 * Math.max(extent.y / 2 / Math.tan(vfov / 2), extent.x / 2 / Math.tan(hfov / 2)) + extent.z / 2;
   camera.position.copy(center).add(new THREE.Vector3(0, 0, distance));
   camera.near = distance / 100;
   camera.far = distance * 100;

@@ -19,7 +19,6 @@ from mpeg4fba.fba import FAPU, FeaturePointSet
 from mpeg4fba.formats.fpjson import (dumps_feature_points_json, loads_confidences,
                                      loads_feature_points_json)
 from mpeg4fba.models import reference_head
-from mpeg4fba.render import point_editor
 from mpeg4fba.render.point_editor import editor_data, point_editor_html, write_point_editor
 from mpeg4fba.render.points import NO_CONFIDENCE, confidence_color, points_image, render_points
 
@@ -105,6 +104,12 @@ def test_page_carries_every_point_and_the_missing_ones(page, face, points, confi
     assert np.array_equal(skin, face.world_vertices("Skin"))
     tri = np.frombuffer(base64.b64decode(meshes["Skin"]["triangles"]), "<u4").reshape(-1, 3)
     assert np.array_equal(tri, face.meshes["Skin"].triangles)
+
+
+def test_confidences_of_missing_points_are_dropped(face, points):
+    data = editor_data(point_editor_html(face, points, missing=MISSING,
+                                         confidences={"10.9": 0.0, " 2.1": 0.5}))
+    assert {p["id"]: p["confidence"] for p in data["points"] if p["confidence"] is not None} == {"2.1": 0.5}
 
 
 def test_bad_arguments_are_refused(face, points):

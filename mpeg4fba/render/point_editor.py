@@ -103,10 +103,13 @@ def _payload(face, points: FeaturePointSet, confidences: Optional[Mapping], miss
              reasons: Optional[Mapping], fapu, units: Optional[str], filename: str) -> dict:
     if not isinstance(points, FeaturePointSet):
         raise TypeError(f"points is a FeaturePointSet, not {type(points).__name__}")
-    # The checks (and the confidences by normalised id) of the writer the page imitates.
-    dumps_feature_points_json(points, fapu, units, confidences=confidences)
-    conf = {normalise_id(k): float(v) for k, v in (confidences or {}).items()}
     missing = _ids(missing)
+    # A finder may rate the points it did not find (0): those confidences are dropped.
+    conf = {normalise_id(k): v for k, v in (confidences or {}).items()}
+    conf = {k: v for k, v in conf.items() if k not in missing}
+    # The checks of the writer the page imitates.
+    dumps_feature_points_json(points, fapu, units, confidences=conf)
+    conf = {k: float(v) for k, v in conf.items()}
     given = set(points.ids)
     both = [fp for fp in missing if fp in given]
     if both:
@@ -160,7 +163,7 @@ def point_editor_html(face, points: FeaturePointSet, *, confidences: Optional[Ma
 
     ``confidences`` (``{id: 0..1}``) colour the points, ``missing`` lists required
     points not found (``reasons`` says why, ``{id: text}``; a reason for a given point
-    shows in its row).  ``fapu`` and ``units`` are carried into the saved file as
+    shows in its row; a confidence for a missing point is dropped).  ``fapu`` and ``units`` are carried into the saved file as
     :func:`~mpeg4fba.formats.fpjson.dumps_feature_points_json` writes them;
     ``filename`` names the download.  ValueError for confidences out of 0..1 or of
     points not given, a point both given and missing, or a vertex the face lacks.

@@ -261,9 +261,9 @@ def _scene(face, frames, frame: int, size: Sequence[int], view, colors: Optional
     """Check the arguments of :func:`render_face` and build its :class:`_Scene`: the
     camera, the framing, the culling and the lighting (per corner) shared by both
     renderers."""
+    w, h, R, centre, dist, half_w, half_h = _framing(face, size, view, fit)
     if shading not in ("gouraud", "flat"):
         raise ValueError(f"shading is 'gouraud' or 'flat', not {shading!r}")
-    w, h, R, centre, dist, half_w, half_h = _framing(face, size, view, fit)
     world = _pose_arrays(face, frames, frame)
     palette = dict(getattr(face, "colors", None) or {})
     palette.update(colors or {})

@@ -12,7 +12,8 @@ import pytest
 from mpeg4fba import vrml
 from mpeg4fba.fba import FAPU, FEATURE_POINTS, FeaturePointError, FeaturePointSet
 from mpeg4fba.formats.errors import FormatError
-from mpeg4fba.formats.fpjson import (dumps_feature_points_json, loads_feature_points_json,
+from mpeg4fba.formats.fpjson import (dumps_feature_points_json, loads_confidences,
+                                     loads_feature_points_json, read_confidences,
                                      read_feature_points_json, write_feature_points_json)
 from mpeg4fba.formats.wrl_fdp import (fdp_coordinate, feature_points_from_fdp,
                                       feature_points_from_scene)
@@ -229,6 +230,63 @@ def test_json_round_trip(tmp_path):
                                      "(toward the viewer); a synthetic adult face") == example
 
 
+def test_json_confidences_round_trip(tmp_path):
+    points = FeaturePointSet({"3.5": (31, 30, 72), "2.1": (0, -75.25, 1e-9)},
+                             {"3.5": ("Skin", 1204), "9.15": ("Skin", 331)})
+    conf = {"9.15": 0.125, "3.5": 1, "2.1": np.float32(0.5)}
+    path = tmp_path / "fp.json"
+    write_feature_points_json(points, path, units="mm", confidences=conf)
+    text = path.read_text("utf-8")
+    assert '"3.5": {"position": [31.0, 30.0, 72.0], "mesh": "Skin", "vertex": 1204, ' \
+           '"confidence": 1.0}' in text
+    assert '"9.15": {"mesh": "Skin", "vertex": 331, "confidence": 0.125}' in text
+    assert read_confidences(path) == {"2.1": 0.5, "3.5": 1.0, "9.15": 0.125}
+    assert list(read_confidences(path)) == ["2.1", "3.5", "9.15"]      # the standard's order
+    assert read_feature_points_json(path) == (points, None)           # unchanged return value
+    assert loads_confidences(dumps_feature_points_json(points)) == {}
+    partial = dumps_feature_points_json(points, confidences={" 9.15": 0.0})   # ids normalised
+    assert loads_confidences(partial) == {"9.15": 0.0}
+    assert dumps_feature_points_json(points, confidences={}) == dumps_feature_points_json(points)
+
+
+@pytest.mark.parametrize("conf, message", [
+    ({"3.6": 0.5}, "a confidence for feature point 3.6, which the points do not have"),
+    ({"3.5": 1.5}, "feature point 3.5: a confidence is a number from 0 to 1, not 1.5"),
+    ({"3.5": -0.1}, "from 0 to 1"),
+    ({"3.5": float("nan")}, "from 0 to 1"),
+    ({"3.5": True}, "from 0 to 1"),
+    ({"3.5": "0.5"}, "from 0 to 1"),
+    ({"3.55": 0.5}, "not a feature point of the standard"),
+])
+def test_json_confidences_refused_when_written(conf, message):
+    points = FeaturePointSet({"3.5": (1, 2, 3)})
+    with pytest.raises(ValueError, match=re.escape(message)):
+        dumps_feature_points_json(points, confidences=conf)
+
+
+@pytest.mark.parametrize("confidence, message", [
+    ("1.5", 'points["3.5"].confidence: expected a number from 0 to 1, not 1.5'),
+    ("-0.5", "not -0.5"),
+    ('"high"', 'not "high"'),
+    ("true", "not true"),
+    ("null", "not null"),
+    ("[1]", "not [1]"),
+    ("1e999", "not Infinity"),
+])
+def test_json_confidence_errors_name_the_item(confidence, message):
+    text = _doc('{"3.5": {"position": [1, 2, 3], "confidence": %s}}' % confidence)
+    for reader in (loads_feature_points_json, loads_confidences):
+        with pytest.raises(FormatError) as info:
+            reader(text, "fp.json")
+        assert str(info.value).startswith("fp.json: ") and message in str(info.value)
+
+
+def test_json_confidence_edges_are_accepted():
+    text = _doc('{"3.5": {"position": [1, 2, 3], "confidence": 0}, "3.6": {"vertex": 1, "confidence": 1}}')
+    assert loads_confidences(text) == {"3.5": 0.0, "3.6": 1.0}
+    assert loads_feature_points_json(text)[0] == FeaturePointSet({"3.5": (1, 2, 3)}, {"3.6": (None, 1)})
+
+
 def _doc(points='{"3.5": {"position": [1, 2, 3]}}', extra=""):
     return ('{"format": "mpeg4fba-feature-points", "version": 1, "points": %s%s}'
             % (points, extra))
@@ -239,7 +297,7 @@ def _doc(points='{"3.5": {"position": [1, 2, 3]}}', extra=""):
     (_doc('{"3.5": {"position": [1, 2, "3"]}}'), 'points["3.5"].position: expected 3 numbers'),
     (_doc('{"3.5": {"position": [1, 2, NaN]}}'), 'points["3.5"].position: expected 3 numbers'),
     (_doc('{"3.5": {"position": [1, 2, 3], "colour": "red"}}'),
-     'points["3.5"]: unknown key "colour"; allowed: position, mesh, vertex'),
+     'points["3.5"]: unknown key "colour"; allowed: position, mesh, vertex, confidence'),
     (_doc(extra=', "scale": 2'),
      'unknown key "scale"; allowed: format, version, units, points, fapu'),
     (_doc('{"3.55": {"position": [1, 2, 3]}}'),

@@ -11,7 +11,7 @@ position, by mesh vertex, or both, and optionally gives the model's FAPU.  Examp
       "points": {
         "2.1": {"position": [0.0, -62.0, 28.0]},
         "3.5": {"position": [31.0, 38.0, 32.0], "mesh": "Skin", "vertex": 1204},
-        "9.15": {"mesh": "Skin", "vertex": 331}
+        "9.15": {"mesh": "Skin", "vertex": 331, "confidence": 0.8}
       },
       "fapu": {"IRISD0": 10.0, "ES0": 62.0, "ENS0": 42.0, "MNS0": 16.0, "MW0": 50.0}
     }
@@ -25,7 +25,10 @@ Rules:
 - ``points`` maps feature point ids ("group.index", groups 2-11) to objects with a
   ``position`` (3 finite numbers) and/or a ``vertex`` (an integer >= 0) with an
   optional ``mesh`` name (a string; a vertex without a mesh is on the model's only
-  mesh).  A ``mesh`` needs a ``vertex``.
+  mesh).  A ``mesh`` needs a ``vertex``.  A point may also carry a ``confidence``,
+  a number from 0 (a guess) to 1 (certain, e.g. placed by a person): how sure whoever
+  found the point is of it.  :func:`loads_feature_points_json` checks and drops it,
+  :func:`loads_confidences` returns it.
 - ``fapu`` holds the five FAPU0 distances IRISD0, ES0, ENS0, MNS0 and MW0, in model
   units (the FAP units are these / 1024).
 
@@ -47,28 +50,34 @@ JSON syntax errors.
 }
 >>> loads_feature_points_json(text) == (pts, None)
 True
+>>> text = dumps_feature_points_json(pts, confidences={"9.15": 0.25})
+>>> text.splitlines()[5]
+'    "9.15": {"mesh": "Skin", "vertex": 331, "confidence": 0.25}'
+>>> loads_confidences(text)
+{'9.15': 0.25}
 """
 from __future__ import annotations
 
 import json
 import math
+import numbers
 import os
-from typing import Optional, Union
+from typing import Mapping, Optional, Union
 
 from ..fba.fapu import FAPU
-from ..fba.featurepoints import FeaturePointError, FeaturePointSet, normalise_id
+from ..fba.featurepoints import FeaturePointError, FeaturePointSet, normalise_id, point_order
 from ..vrml.writer import atomic_write
 from .errors import FormatError
 
 __all__ = ["FORMAT_NAME", "FORMAT_VERSION", "read_feature_points_json",
            "loads_feature_points_json", "write_feature_points_json",
-           "dumps_feature_points_json"]
+           "dumps_feature_points_json", "read_confidences", "loads_confidences"]
 
 FORMAT_NAME = "mpeg4fba-feature-points"
 FORMAT_VERSION = 1
 
 _TOP_KEYS = ("format", "version", "units", "points", "fapu")
-_POINT_KEYS = ("position", "mesh", "vertex")
+_POINT_KEYS = ("position", "mesh", "vertex", "confidence")
 _FAPU_KEYS = ("IRISD0", "ES0", "ENS0", "MNS0", "MW0")
 
 PathLike = Union[str, "os.PathLike[str]"]
@@ -128,12 +137,42 @@ def loads_feature_points_json(text: Union[str, bytes], path: Optional[str] = Non
                               ) -> tuple[FeaturePointSet, Optional[FAPU]]:
     """(feature points, FAPU or None) from sidecar JSON text; ``path`` names it in errors.
 
+    Confidences are checked and left out (:func:`loads_confidences` returns them).
+
     >>> loads_feature_points_json('{"format": "mpeg4fba-feature-points", "version": 1,'
     ...     ' "points": {"3.5": {"position": [1, 2]}}}')
     Traceback (most recent call last):
     ...
     mpeg4fba.formats.errors.FormatError: points["3.5"].position: expected 3 numbers, not [1, 2]
     """
+    points, fapu, _ = _parse(text, path)
+    return points, fapu
+
+
+def loads_confidences(text: Union[str, bytes], path: Optional[str] = None) -> dict:
+    """{feature point id: confidence} of the points of sidecar JSON text that carry one,
+    in the standard's order; the whole document is checked as
+    :func:`loads_feature_points_json` checks it.
+
+    >>> loads_confidences('{"format": "mpeg4fba-feature-points", "version": 1,'
+    ...     ' "points": {"3.5": {"vertex": 7, "confidence": 1.5}}}')
+    Traceback (most recent call last):
+    ...
+    mpeg4fba.formats.errors.FormatError: points["3.5"].confidence: expected a number from 0 to 1, not 1.5
+    """
+    return _parse(text, path)[2]
+
+
+def read_confidences(path: PathLike) -> dict:
+    """{feature point id: confidence} from the sidecar file at ``path`` (see
+    :func:`loads_confidences`)."""
+    with open(path, "rb") as f:
+        data = f.read()
+    return loads_confidences(data, os.fspath(path))
+
+
+def _parse(text: Union[str, bytes], path: Optional[str]) -> tuple:
+    """(points, FAPU or None, {id: confidence}) of a checked document."""
     try:
         doc = json.loads(text, object_pairs_hook=_Object)
     except json.JSONDecodeError as e:
@@ -157,7 +196,7 @@ def loads_feature_points_json(text: Union[str, bytes], path: Optional[str] = Non
     if "units" in doc and not isinstance(doc["units"], str):
         raise check.error("units", f"expected a string, not {_kind(doc['units'])}")
 
-    positions, vertices, seen = {}, {}, {}
+    positions, vertices, confidences, seen = {}, {}, {}, {}
     points = check.object(doc["points"], "points", (), "feature point id -> point")
     for key, value in points.items():
         where = f"points[{json.dumps(key)}]"
@@ -190,6 +229,12 @@ def loads_feature_points_json(text: Union[str, bytes], path: Optional[str] = Non
                 raise check.error(_join(where, "mesh"),
                                   f"expected a string, not {_kind(mesh)}")
             vertices[fp] = (mesh, v)
+        if "confidence" in point:
+            c = point["confidence"]
+            if not (_is_number(c) and 0 <= c <= 1):
+                raise check.error(_join(where, "confidence"),
+                                  f"expected a number from 0 to 1, not {json.dumps(c)}")
+            confidences[fp] = float(c)
 
     fapu = None
     if "fapu" in doc and doc["fapu"] is not None:
@@ -203,7 +248,8 @@ def loads_feature_points_json(text: Union[str, bytes], path: Optional[str] = Non
                 raise check.error(_join("fapu", k), f"expected a number, not "
                                   f"{json.dumps(values[k])}")
         fapu = FAPU(**{k: float(values[k]) for k in _FAPU_KEYS})
-    return FeaturePointSet(positions, vertices), fapu
+    ordered = {fp: confidences[fp] for fp in point_order(confidences)}
+    return FeaturePointSet(positions, vertices), fapu, ordered
 
 
 def read_feature_points_json(path: PathLike) -> tuple[FeaturePointSet, Optional[FAPU]]:
@@ -213,9 +259,28 @@ def read_feature_points_json(path: PathLike) -> tuple[FeaturePointSet, Optional[
     return loads_feature_points_json(data, os.fspath(path))
 
 
+def _checked_confidences(points: FeaturePointSet, confidences: Optional[Mapping]) -> dict:
+    """``confidences`` by normalised id; ValueError for one of no point of ``points`` or
+    one that is not a number from 0 to 1."""
+    out = {}
+    for key, value in (confidences or {}).items():
+        fp = normalise_id(key)
+        if fp not in points.ids:
+            raise ValueError(f"a confidence for feature point {fp}, which the points do not have")
+        if not isinstance(value, numbers.Real) or isinstance(value, bool) \
+                or not 0 <= float(value) <= 1:     # NaN fails the range too
+            raise ValueError(f"feature point {fp}: a confidence is a number from 0 to 1, "
+                             f"not {value!r}")
+        out[fp] = float(value)
+    return out
+
+
 def dumps_feature_points_json(points: FeaturePointSet, fapu: Optional[FAPU] = None,
-                              units: Optional[str] = None) -> str:
-    """Sidecar JSON text: one line per point, in the standard's order."""
+                              units: Optional[str] = None, *,
+                              confidences: Optional[Mapping] = None) -> str:
+    """Sidecar JSON text: one line per point, in the standard's order.  ``confidences``
+    (``{id: number from 0 to 1}``, optional) gives points their ``"confidence"``."""
+    conf = _checked_confidences(points, confidences)
     lines = []
     positions = set(points)
     vertices = points.vertices
@@ -228,6 +293,8 @@ def dumps_feature_points_json(points: FeaturePointSet, fapu: Optional[FAPU] = No
             if mesh is not None:
                 entry["mesh"] = mesh
             entry["vertex"] = int(index)
+        if fp in conf:
+            entry["confidence"] = conf[fp]
         lines.append(f"    {json.dumps(fp)}: {json.dumps(entry)}")
     out = ["{", f'  "format": {json.dumps(FORMAT_NAME)},', f'  "version": {FORMAT_VERSION},']
     if units is not None:
@@ -242,6 +309,9 @@ def dumps_feature_points_json(points: FeaturePointSet, fapu: Optional[FAPU] = No
 
 
 def write_feature_points_json(points: FeaturePointSet, path: PathLike,
-                              fapu: Optional[FAPU] = None, units: Optional[str] = None) -> None:
-    """Write a sidecar file (atomically: all or nothing)."""
-    atomic_write(os.fspath(path), dumps_feature_points_json(points, fapu, units).encode("utf-8"))
+                              fapu: Optional[FAPU] = None, units: Optional[str] = None, *,
+                              confidences: Optional[Mapping] = None) -> None:
+    """Write a sidecar file (atomically: all or nothing); ``confidences`` as in
+    :func:`dumps_feature_points_json`."""
+    text = dumps_feature_points_json(points, fapu, units, confidences=confidences)
+    atomic_write(os.fspath(path), text.encode("utf-8"))

@@ -56,7 +56,7 @@ from .._atomic import atomic_write
 from ..fba.appearance import mesh_color
 
 __all__ = ["render_face", "render_grid", "save_png", "save_image", "IMAGE_SUFFIXES", "mesh_color",
-           "VIEWS", "BACKENDS"]
+           "VIEWS", "BACKENDS", "project_points"]
 
 #: Camera yaw (degrees, about the face's up axis) and pitch of each named view.
 VIEWS = {"front": (0.0, 0.0), "three-quarter": (35.0, 8.0), "profile": (90.0, 0.0)}
@@ -202,12 +202,10 @@ class _Scene:
     colors: np.ndarray
 
 
-def _scene(face, frames, frame: int, size: Sequence[int], view, colors: Optional[Mapping],
-           shading: str, background: Sequence[float], light: Sequence[float], fit,
-           cull: bool, hide: Sequence[str]) -> _Scene:
-    """Check the arguments of :func:`render_face` and build its :class:`_Scene`: the
-    camera, the framing, the culling and the lighting (per corner) shared by both
-    renderers."""
+def _framing(face, size: Sequence[int], view, fit) -> tuple:
+    """The camera of :func:`render_face`: ``(w, h, R, centre, dist, half_w, half_h)``,
+    the image size, the world-to-camera rotation, the point looked at, the camera's
+    distance from it and the half extents of the image plane."""
     w, h = (int(s) for s in size)
     if w < 1 or h < 1:
         raise ValueError(f"size is (width, height) in pixels, not {tuple(size)}")
@@ -217,11 +215,6 @@ def _scene(face, frames, frame: int, size: Sequence[int], view, colors: Optional
         yaw, pitch = VIEWS[view]
     else:
         yaw, pitch = (float(a) for a in view)
-    if shading not in ("gouraud", "flat"):
-        raise ValueError(f"shading is 'gouraud' or 'flat', not {shading!r}")
-    world = _pose_arrays(face, frames, frame)
-    palette = dict(getattr(face, "colors", None) or {})
-    palette.update(colors or {})
     R = _camera(yaw, pitch)
     # Frame the neutral face (all meshes), seen from this camera.
     if fit is None:
@@ -235,6 +228,45 @@ def _scene(face, frames, frame: int, size: Sequence[int], view, colors: Optional
     cam_pts = (corners - centre) @ R.T
     radius = float(np.linalg.norm(hi - lo)) / 2 or 1.0
     dist = 3.2 * radius
+    proj_box = cam_pts[:, :2] * (dist / (dist - cam_pts[:, 2]))[:, None]
+    half = np.abs(proj_box).max(axis=0) * 1.06
+    aspect = w / h
+    half_w, half_h = max(half[0], half[1] * aspect), max(half[1], half[0] / aspect)
+    return w, h, R, centre, dist, float(half_w), float(half_h)
+
+
+def project_points(face, points, *, size: Sequence[int] = (480, 560),
+                   view: Union[str, tuple] = "front", fit=None) -> np.ndarray:
+    """Where world points ``[n, 3]`` fall in the image :func:`render_face` draws with
+    the same ``size``, ``view`` and ``fit``: ``[n, 3]`` rows of (column, row, distance
+    from the camera along its axis), in pixels from the top left corner.
+
+    >>> from mpeg4fba.fba.face import FaceMesh, FaceModel
+    >>> quad = FaceMesh("Skin", [[-1, -1, 0], [1, -1, 0], [1, 1, 0], [-1, 1, 0]], [[0, 1, 2], [0, 2, 3]])
+    >>> project_points(FaceModel([quad]), [[0, 0, 0]], size=(64, 48))[0, :2].tolist()
+    [32.0, 24.0]
+    """
+    w, h, R, centre, dist, half_w, half_h = _framing(face, size, view, fit)
+    v = (np.asarray(points, dtype=float).reshape(-1, 3) - centre) @ R.T
+    depth = dist - v[:, 2]
+    proj = v[:, :2] * (dist / np.where(depth > 0, depth, np.nan))[:, None]
+    col = (proj[:, 0] + half_w) / (2 * half_w) * w
+    row = (half_h - proj[:, 1]) / (2 * half_h) * h
+    return np.stack([col, row, depth], axis=1)
+
+
+def _scene(face, frames, frame: int, size: Sequence[int], view, colors: Optional[Mapping],
+           shading: str, background: Sequence[float], light: Sequence[float], fit,
+           cull: bool, hide: Sequence[str]) -> _Scene:
+    """Check the arguments of :func:`render_face` and build its :class:`_Scene`: the
+    camera, the framing, the culling and the lighting (per corner) shared by both
+    renderers."""
+    w, h, R, centre, dist, half_w, half_h = _framing(face, size, view, fit)
+    if shading not in ("gouraud", "flat"):
+        raise ValueError(f"shading is 'gouraud' or 'flat', not {shading!r}")
+    world = _pose_arrays(face, frames, frame)
+    palette = dict(getattr(face, "colors", None) or {})
+    palette.update(colors or {})
     light_dir = np.asarray(light, float)
     light_dir = light_dir / np.linalg.norm(light_dir)
     light_cam = light_dir           # given in the camera frame: every view is lit alike
@@ -280,10 +312,6 @@ def _scene(face, frames, frame: int, size: Sequence[int], view, colors: Optional
         polys.append(p[keep])
         shades.append(corner[keep])
         depths.append(depth[tri[keep]])
-    proj_box = cam_pts[:, :2] * (dist / (dist - cam_pts[:, 2]))[:, None]
-    half = np.abs(proj_box).max(axis=0) * 1.06
-    aspect = w / h
-    half_w, half_h = max(half[0], half[1] * aspect), max(half[1], half[0] / aspect)
     return _Scene(w, h, float(half_w), float(half_h), shading, tuple(background),
                   np.concatenate(polys) if polys else np.zeros((0, 3, 2)),
                   np.concatenate(depths) if depths else np.zeros((0, 3)),

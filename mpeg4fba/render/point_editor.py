@@ -1,0 +1,732 @@
+"""The feature point editor: one self-contained HTML page to check and move a face's points.
+
+:func:`point_editor_html` draws a face's meshes with three.js (vendored, inlined as the
+HTML player inlines it: ``data:`` URLs in an import map; the page works from ``file://``
+with no network) and on them every feature point, labelled with its id and coloured by
+its confidence (red 0 -> yellow -> green 1; blue: no confidence given).  A side panel
+has the legend, the required points that are missing (with the reasons given), and a
+table of the points.  Click a point (its marker, label or row), then click the surface:
+the point moves to the vertex of the clicked triangle nearest the click, and takes that
+vertex's mesh and index and confidence 1.0 (a person placed it).  A missing point is
+placed the same way.  "Undo" takes back the last move, "Save points" downloads the
+sidecar JSON (:mod:`mpeg4fba.formats.fpjson`): built in the page to match
+:func:`~mpeg4fba.formats.fpjson.dumps_feature_points_json` byte for byte, so a page
+saved without edits gives back the file it was made from.
+
+For tests the page exposes ``window.__editor`` (``ready``, ``error``, ``select(id)``,
+``selected()``, ``moveTo(mesh, vertex or [x, y, z])``, ``undo()``, ``json()``,
+``screenOf(mesh, vertex)``) and sets ``document.body.dataset.ready = "1"`` once drawn.
+
+Example
+-------
+>>> from mpeg4fba.models import reference_head
+>>> from mpeg4fba.fba import FeaturePointSet
+>>> face = reference_head(resolution=0.5)
+>>> found = {k: v for k, v in face.points.vertices.items() if k != "10.9"}
+>>> page = point_editor_html(face, FeaturePointSet({}, found), missing=["10.9"],
+...                          reasons={"10.9": "no ear found"}, title="Check <me>")
+>>> page.startswith("<!DOCTYPE html>"), "Check &lt;me&gt;" in page, "<script src=" in page
+(True, True, False)
+>>> data = editor_data(page)
+>>> len(data["points"]), data["missing"][0]["reason"]
+(83, 'no ear found')
+"""
+from __future__ import annotations
+
+import base64
+import html
+import json
+import os
+import re
+from functools import lru_cache
+from importlib import resources
+from pathlib import Path
+from typing import Iterable, Mapping, Optional, Union
+
+import numpy as np
+
+from .._atomic import atomic_write
+from ..fba.featurepoints import FeaturePointSet, normalise_id, point_order
+from ..fba.tables import FEATURE_POINTS
+from ..formats.fpjson import FORMAT_NAME, FORMAT_VERSION, dumps_feature_points_json
+from .player import THREE_VERSION, vendored_modules
+
+__all__ = ["point_editor_html", "write_point_editor", "editor_data"]
+
+#: The vendored modules the editor uses (no glTF loader: the meshes travel as arrays).
+_MODULES = ("three", "three/addons/controls/OrbitControls.js")
+_DATA = re.compile(r'<script id="editor-data" type="application/json">(.*?)</script>', re.S)
+
+
+@lru_cache(maxsize=1)
+def _import_map_json() -> str:
+    sources = vendored_modules()
+    imports = {spec: "data:text/javascript;base64,"
+               + base64.b64encode(sources[spec].encode("utf-8")).decode("ascii")
+               for spec in _MODULES}
+    return json.dumps({"imports": imports}, indent=0)
+
+
+def _licence() -> str:
+    text = resources.files(__package__).joinpath("web", "LICENSE").read_text("utf-8")
+    return text.replace("--", "- -").strip()
+
+
+def _b64(array: np.ndarray) -> str:
+    return base64.b64encode(np.ascontiguousarray(array).tobytes()).decode("ascii")
+
+
+def _script_json(value) -> str:
+    """JSON safe inside a <script> element (no "</script", no "<!--")."""
+    return json.dumps(value, separators=(",", ":"), allow_nan=False).replace("<", "\\u003c")
+
+
+def editor_data(page: str) -> dict:
+    """The data an editor page carries (meshes, points, missing points), as a dict.
+
+    >>> editor_data('<script id="editor-data" type="application/json">{"points": []}</script>')
+    {'points': []}
+    """
+    m = _DATA.search(page)
+    if m is None:
+        raise ValueError("the page carries no editor data")
+    return json.loads(m.group(1))
+
+
+def _ids(values: Iterable) -> list:
+    if isinstance(values, str):
+        values = [values]
+    return point_order({normalise_id(v) for v in values})
+
+
+def _payload(face, points: FeaturePointSet, confidences: Optional[Mapping], missing: Iterable,
+             reasons: Optional[Mapping], fapu, units: Optional[str], filename: str) -> dict:
+    if not isinstance(points, FeaturePointSet):
+        raise TypeError(f"points is a FeaturePointSet, not {type(points).__name__}")
+    missing = _ids(missing)
+    # A finder may rate the points it did not find (0): those confidences are dropped.
+    conf = {normalise_id(k): v for k, v in (confidences or {}).items()}
+    conf = {k: v for k, v in conf.items() if k not in missing}
+    # The checks of the writer the page imitates.
+    dumps_feature_points_json(points, fapu, units, confidences=conf)
+    conf = {k: float(v) for k, v in conf.items()}
+    given = set(points.ids)
+    both = [fp for fp in missing if fp in given]
+    if both:
+        raise ValueError(f"feature point{'s' if len(both) > 1 else ''} {', '.join(both)} "
+                         "given and listed as missing")
+    reasons = {normalise_id(k): str(v) for k, v in (reasons or {}).items()}
+    world = {name: np.asarray(face.world_vertices(name), dtype=np.float64) for name in face.meshes}
+    shown = points.resolve(world)         # where cloning will take each point to be
+    meshes = []
+    for name, mesh in face.meshes.items():
+        if not len(mesh.vertices) or not len(mesh.triangles):
+            continue
+        colour, per_vertex = face.mesh_colors(name)
+        meshes.append({
+            "name": name,
+            "positions": _b64(world[name].astype("<f8")),
+            "triangles": _b64(np.asarray(mesh.triangles).astype("<u4")),
+            "color": [float(c) for c in colour[:3]],
+            "colors": None if per_vertex is None else _b64(
+                np.clip(np.round(np.asarray(per_vertex)[:, :3] * 255), 0, 255).astype(np.uint8)),
+            "closed": bool(mesh.is_closed()),
+        })
+    unknown = sorted({m for m, _ in points.vertices.values() if m is not None} - set(world))
+    if unknown:           # resolve() has refused these already; kept as a guard
+        raise ValueError(f"points on meshes the face does not have: {', '.join(unknown)}")
+    names = {fp.id: fp.description for fp in FEATURE_POINTS}
+    rows = []
+    positions = set(points)
+    for fp in points.ids:
+        tie = points.vertex(fp)
+        rows.append({"id": fp, "name": names.get(fp, ""),
+                     "position": [float(x) for x in points[fp]] if fp in positions else None,
+                     "mesh": tie[0] if tie else None, "vertex": tie[1] if tie else None,
+                     "confidence": conf.get(fp), "shown": [float(x) for x in shown[fp]],
+                     "reason": reasons.get(fp)})
+    return {
+        "format": FORMAT_NAME, "version": FORMAT_VERSION, "units": units,
+        "fapu": None if fapu is None else {k: float(v) for k, v in fapu.as_dict().items()},
+        "order": [fp.id for fp in FEATURE_POINTS], "filename": filename,
+        "meshes": meshes, "points": rows,
+        "missing": [{"id": fp, "name": names.get(fp, ""), "reason": reasons.get(fp, "")}
+                    for fp in missing],
+    }
+
+
+def point_editor_html(face, points: FeaturePointSet, *, confidences: Optional[Mapping] = None,
+                      missing: Iterable = (), reasons: Optional[Mapping] = None,
+                      title: str = "Feature points", fapu=None, units: Optional[str] = None,
+                      filename: str = "points.json") -> str:
+    """One self-contained HTML page to review and move ``points`` on ``face``.
+
+    ``confidences`` (``{id: 0..1}``) colour the points, ``missing`` lists required
+    points not found (``reasons`` says why, ``{id: text}``; a reason for a given point
+    shows in its row; a confidence for a missing point is dropped).  ``fapu`` and ``units`` are carried into the saved file as
+    :func:`~mpeg4fba.formats.fpjson.dumps_feature_points_json` writes them;
+    ``filename`` names the download.  ValueError for confidences out of 0..1 or of
+    points not given, a point both given and missing, or a vertex the face lacks.
+
+    >>> from mpeg4fba.fba.face import FaceMesh, FaceModel
+    >>> quad = FaceMesh("Skin", [[-1, -1, 0], [1, -1, 0], [1, 1, 0], [-1, 1, 0]], [[0, 1, 2], [0, 2, 3]])
+    >>> pts = FeaturePointSet({}, {"9.3": ("Skin", 2)})
+    >>> data = editor_data(point_editor_html(FaceModel([quad]), pts, confidences={"9.3": 0.5}))
+    >>> row = data["points"][0]
+    >>> row["id"], row["position"], row["mesh"], row["vertex"], row["confidence"], row["shown"]
+    ('9.3', None, 'Skin', 2, 0.5, [1.0, 1.0, 0.0])
+    """
+    data = _payload(face, points, confidences, missing, reasons, fapu, units, str(filename))
+    fill = {"LICENSE": _licence(), "VERSION": THREE_VERSION, "IMPORTMAP": _import_map_json(),
+            "DATA": _script_json(data), "JS": _EDITOR_JS, "TITLE": html.escape(str(title))}
+    return re.sub(r"@([A-Z]+)@", lambda m: fill[m.group(1)], _TEMPLATE)
+
+
+def write_point_editor(path: Union[str, os.PathLike], face, points: FeaturePointSet,
+                       **kw) -> Path:
+    """Write :func:`point_editor_html` to ``path`` atomically (a temporary file beside it,
+    then a rename) and return the path; ``title`` defaults to the file's name.
+
+    >>> import tempfile
+    >>> from mpeg4fba.models import reference_head
+    >>> face = reference_head(resolution=0.5)
+    >>> with tempfile.TemporaryDirectory() as d:
+    ...     p = write_point_editor(os.path.join(d, "review.html"), face, face.points)
+    ...     p.name, "<title>review</title>" in p.read_text("utf-8"), os.listdir(d)
+    ('review.html', True, ['review.html'])
+    """
+    path = Path(path)
+    kw.setdefault("title", path.stem)
+    text = point_editor_html(face, points, **kw)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    atomic_write(path, text)
+    return path
+
+
+_TEMPLATE = """<!DOCTYPE html>
+<html lang="en">
+<head>
+<meta charset="utf-8">
+<meta name="viewport" content="width=device-width, initial-scale=1">
+<meta name="generator" content="mpeg4fba point editor (three.js @VERSION@)">
+<title>@TITLE@</title>
+<!--
+This page embeds three.js @VERSION@ (build/three.module.min.js and, from examples/jsm,
+controls/OrbitControls.js) as base64 data: URLs in the import map below, unmodified.
+Its licence:
+
+@LICENSE@
+-->
+<style>
+html,body{margin:0;height:100%;overflow:hidden;background:#8e9196;color:#e8e8e8;font:13px/1.4 system-ui,sans-serif}
+#view{position:fixed;left:0;top:0;bottom:0;right:340px}
+#view canvas{display:block}
+#labels{position:fixed;left:0;top:0;bottom:0;right:340px;overflow:hidden;pointer-events:none}
+.lab{position:absolute;transform:translate(5px,-100%);font:10px/1 system-ui,sans-serif;color:#fff;text-shadow:0 0 2px #000,0 0 2px #000;white-space:nowrap;cursor:pointer;pointer-events:auto;user-select:none}
+.lab.behind{opacity:.45}
+.lab.sel{font-weight:700;font-size:12px;color:#ffe14d}
+#labels.off .lab:not(.sel){display:none}
+#title{position:fixed;top:8px;left:12px;font-size:15px;font-weight:600;color:#fff;text-shadow:0 1px 2px #0009;pointer-events:none}
+#status{position:fixed;left:12px;bottom:10px;right:352px;padding:5px 9px;border-radius:5px;background:#1e2024d0;pointer-events:none}
+#panel{position:fixed;top:0;right:0;bottom:0;width:340px;box-sizing:border-box;display:flex;flex-direction:column;padding:8px 10px;background:#1e2024}
+#missing{max-height:30vh;overflow:auto;flex:none}
+#tablebox{flex:1;min-height:120px;overflow:auto}
+#panel h2{margin:10px 0 4px;font-size:11px;font-weight:600;letter-spacing:.06em;text-transform:uppercase;color:#aab}
+#legend .bar{height:10px;border-radius:3px;background:linear-gradient(to right,hsl(0,80%,45%),hsl(60,80%,45%),hsl(120,80%,45%))}
+#legend .ends{display:flex;justify-content:space-between;font-size:11px;color:#ccd}
+.sw{display:inline-block;width:10px;height:10px;border-radius:50%;margin-right:5px;vertical-align:-1px}
+.buttons{display:flex;gap:6px;margin:8px 0}
+button{flex:1;height:28px;border:0;border-radius:4px;background:#44484f;color:#fff;font:inherit;cursor:pointer}
+button:disabled{opacity:.45;cursor:default}
+button#save{background:#2f6fb3}
+#missing div{padding:2px 4px;border-radius:3px;cursor:pointer}
+#missing .why{color:#aab;font-size:12px}
+#missing .placed{text-decoration:line-through;color:#889}
+.none{color:#889}
+table{width:100%;border-collapse:collapse;font-size:12px}
+th{position:sticky;top:0;background:#1e2024;text-align:left;font-weight:600;color:#aab}
+td,th{padding:2px 4px;white-space:nowrap}
+tbody tr{cursor:pointer}
+tbody tr:hover,#missing div:hover{background:#2c2f35}
+tr.sel td,#missing div.sel{background:#5a4a10}
+tr.moved td:first-child::after{content:" *";color:#ffe14d}
+td.num{text-align:right;font-variant-numeric:tabular-nums}
+td.note{max-width:90px;overflow:hidden;text-overflow:ellipsis;color:#aab}
+label{font-size:12px;color:#ccd}
+#msg{position:fixed;inset:0;display:flex;align-items:center;justify-content:center;padding:2em;box-sizing:border-box;text-align:center;white-space:pre-wrap;font-size:16px;background:#3b3d42;color:#fff}
+#msg[hidden]{display:none}
+</style>
+<script type="importmap">@IMPORTMAP@</script>
+</head>
+<body>
+<div id="view"></div>
+<div id="labels"></div>
+<div id="title">@TITLE@</div>
+<div id="status">Loading...</div>
+<div id="panel">
+<h2>Confidence</h2>
+<div id="legend"><div class="bar"></div><div class="ends"><span>0 (a guess)</span><span>0.5</span><span>1 (certain)</span></div>
+<div style="font-size:11px;color:#ccd;margin-top:3px"><span class="sw" style="background:#3d8bfd"></span>no confidence given &nbsp; <span class="sw" style="background:#ffe14d"></span>selected</div></div>
+<div class="buttons"><button id="undo" type="button" disabled title="Undo the last move (Ctrl+Z)">Undo</button><button id="save" type="button" title="Download the points as sidecar JSON">Save points</button></div>
+<label><input id="showlabels" type="checkbox" checked> labels</label>
+<h2 id="missinghead">Missing required points</h2>
+<div id="missing"></div>
+<h2 id="pointshead">Points</h2>
+<div id="tablebox"><table><thead><tr><th>id</th><th>on</th><th class="num">conf.</th><th>note</th></tr></thead><tbody id="rows"></tbody></table></div>
+</div>
+<div id="msg">Loading the face...
+(this page needs JavaScript, ES modules and import maps)</div>
+<script id="editor-data" type="application/json">@DATA@</script>
+<script>
+// A classic script: it runs even where modules cannot, so a failure is never a blank page.
+window.__editor = {ready: false, error: null};
+window.__fail = function (text) {
+  text = String(text || 'unknown error');
+  if (/ResizeObserver/.test(text)) return;
+  console.error('editor:', text);
+  if (window.__editor.error) return;
+  window.__editor.error = text;
+  document.body.dataset.error = text;
+  const msg = document.getElementById('msg');
+  msg.textContent = 'The face cannot be shown:\\n' + text;
+  msg.hidden = false;
+};
+addEventListener('error', e => __fail(e.message || (e.error && e.error.message)));
+addEventListener('unhandledrejection', e => __fail(e.reason && e.reason.message || e.reason));
+if (!(window.HTMLScriptElement && HTMLScriptElement.supports && HTMLScriptElement.supports('importmap')))
+  __fail('this browser has no import maps: open the page in a current Chrome, Edge, Firefox or Safari');
+setTimeout(() => { if (!__editor.ready) __fail('the editor did not start within 30 s'); }, 30000);
+</script>
+<script type="module">
+@JS@
+</script>
+</body>
+</html>
+"""
+
+_EDITOR_JS = r"""import * as THREE from 'three';
+import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
+
+const $ = id => document.getElementById(id);
+const E = window.__editor;
+const D = JSON.parse($('editor-data').textContent);
+const view = $('view'), labelBox = $('labels'), statusBar = $('status');
+
+// ---- the sidecar JSON, written as Python's json.dumps writes it (fpjson's writer)
+function pyFloat(x) {              // repr(float(x))
+  if (!Number.isFinite(x)) throw new Error('not a finite number: ' + x);
+  if (x === 0) return Object.is(x, -0) ? '-0.0' : '0.0';
+  const [mant, expText] = x.toExponential().split('e');
+  const e = Number(expText), sign = mant[0] === '-' ? '-' : '';
+  const digits = mant.replace('-', '').replace('.', '');
+  if (e >= -4 && e < 16) {
+    if (e < 0) return sign + '0.' + '0'.repeat(-e - 1) + digits;
+    const whole = digits.slice(0, e + 1).padEnd(e + 1, '0');
+    return sign + whole + '.' + (digits.slice(e + 1) || '0');
+  }
+  return sign + digits[0] + (digits.length > 1 ? '.' + digits.slice(1) : '') +
+    'e' + (e < 0 ? '-' : '+') + String(Math.abs(e)).padStart(2, '0');
+}
+const SHORT = { '"': '\\"', '\\': '\\\\', '\n': '\\n', '\r': '\\r', '\t': '\\t', '\b': '\\b', '\f': '\\f' };
+function pyStr(s) {                // json.dumps(s) (ensure_ascii)
+  let out = '"';
+  for (const ch of String(s).split('')) {
+    const c = ch.charCodeAt(0);
+    if (SHORT[ch]) out += SHORT[ch];
+    else if (c >= 0x20 && c <= 0x7e) out += ch;
+    else out += '\\u' + c.toString(16).padStart(4, '0');
+  }
+  return out + '"';
+}
+function entryJson(p) {
+  const parts = [];
+  if (p.position) parts.push('"position": [' + p.position.map(pyFloat).join(', ') + ']');
+  if (p.vertex !== null) {
+    if (p.mesh !== null) parts.push('"mesh": ' + pyStr(p.mesh));
+    parts.push('"vertex": ' + String(p.vertex));
+  }
+  if (p.confidence !== null) parts.push('"confidence": ' + pyFloat(p.confidence));
+  return '{' + parts.join(', ') + '}';
+}
+function documentJson() {
+  const lines = [];
+  for (const id of D.order) {
+    const p = state.get(id);
+    if (p && (p.position || p.vertex !== null)) lines.push('    ' + pyStr(id) + ': ' + entryJson(p));
+  }
+  const out = ['{', '  "format": ' + pyStr(D.format) + ',', '  "version": ' + D.version + ','];
+  if (D.units !== null) out.push('  "units": ' + pyStr(D.units) + ',');
+  out.push('  "points": {' + (lines.length ? '\n' + lines.join(',\n') + '\n  ' : '') + '}' + (D.fapu ? ',' : ''));
+  if (D.fapu) out.push('  "fapu": {' + Object.entries(D.fapu).map(([k, v]) => pyStr(k) + ': ' + pyFloat(v)).join(', ') + '}');
+  out.push('}');
+  return out.join('\n') + '\n';
+}
+
+// ---- colours: confidence 0 red -> 0.5 yellow -> 1 green; none given: blue
+const NO_CONFIDENCE = '#3d8bfd', SELECTED = '#ffe14d';
+const confColor = c => c === null ? NO_CONFIDENCE : 'hsl(' + (120 * c).toFixed(1) + ',80%,45%)';
+
+function bytes(base64) {
+  const text = atob(base64);
+  const out = new Uint8Array(text.length);
+  for (let i = 0; i < text.length; i++) out[i] = text.charCodeAt(i);
+  return out.buffer;
+}
+
+// ---- the points: id -> {position|null, mesh|null, vertex|null, confidence|null, shown|null, ...}
+const state = new Map();
+for (const p of D.points) state.set(p.id, { ...p, moved: false, missing: false });
+for (const m of D.missing) state.set(m.id, { id: m.id, name: m.name, position: null, mesh: null, vertex: null,
+                                             confidence: null, shown: null, reason: m.reason, moved: false, missing: true });
+const history = [];
+let selected = null;
+
+async function main() {
+  let renderer;
+  try {
+    renderer = new THREE.WebGLRenderer({ antialias: true, preserveDrawingBuffer: true });
+  } catch (e) {
+    throw new Error('WebGL is not available in this browser (' + (e.message || e) + ')');
+  }
+  renderer.setPixelRatio(Math.min(window.devicePixelRatio || 1, 2));
+  view.appendChild(renderer.domElement);
+  const canvas = renderer.domElement;
+
+  const scene = new THREE.Scene();
+  scene.background = new THREE.Color(0x8e9196);
+  scene.add(new THREE.HemisphereLight(0xf4f6ff, 0x4a4540, 1.5));
+  const camera = new THREE.PerspectiveCamera(30, 1, 0.01, 100);
+  const key = new THREE.DirectionalLight(0xffffff, 2.0);
+  key.position.set(-0.5, 0.7, 0.6);
+  key.target.position.set(0, 0, -1);
+  camera.add(key, key.target);
+  scene.add(camera);
+
+  // The meshes, in world coordinates (float64 kept for the saved positions).
+  const meshes = new Map(), pickable = [];
+  const box = new THREE.Box3();
+  for (const m of D.meshes) {
+    const world = new Float64Array(bytes(m.positions));
+    const geometry = new THREE.BufferGeometry();
+    geometry.setAttribute('position', new THREE.BufferAttribute(new Float32Array(world), 3));
+    geometry.setIndex(new THREE.BufferAttribute(new Uint32Array(bytes(m.triangles)), 1));
+    if (m.colors) {
+      const rgb = new Uint8Array(bytes(m.colors));
+      const linear = new Float32Array(rgb.length), c = new THREE.Color();
+      for (let i = 0; i < rgb.length; i += 3) {
+        c.setRGB(rgb[i] / 255, rgb[i + 1] / 255, rgb[i + 2] / 255, THREE.SRGBColorSpace);
+        linear[i] = c.r; linear[i + 1] = c.g; linear[i + 2] = c.b;
+      }
+      geometry.setAttribute('color', new THREE.BufferAttribute(linear, 3));
+    }
+    geometry.computeVertexNormals();
+    geometry.computeBoundingBox();
+    box.union(geometry.boundingBox);
+    const material = new THREE.MeshStandardMaterial({
+      color: m.colors ? 0xffffff : new THREE.Color().setRGB(...m.color, THREE.SRGBColorSpace),
+      vertexColors: !!m.colors, roughness: 0.7, metalness: 0,
+      side: m.closed ? THREE.FrontSide : THREE.DoubleSide });
+    const mesh = new THREE.Mesh(geometry, material);
+    mesh.name = m.name;
+    mesh.userData.world = world;
+    scene.add(mesh);
+    meshes.set(m.name, mesh);
+    pickable.push(mesh);
+  }
+  if (box.isEmpty()) throw new Error('the face has no geometry to show');
+  const center = box.getCenter(new THREE.Vector3());
+  const size = box.getSize(new THREE.Vector3()).length();
+  const radius = Math.max(size / 2, 1e-9);
+
+  // Markers: an opaque sphere where the point shows, and a faint one seen through the face.
+  const sphere = new THREE.SphereGeometry(0.0045 * size, 14, 10);
+  const markers = [];
+  function makeMarker(p) {
+    const front = new THREE.Mesh(sphere, new THREE.MeshBasicMaterial({ color: 0xffffff }));
+    const ghost = new THREE.Mesh(sphere, new THREE.MeshBasicMaterial({ color: 0xffffff, transparent: true,
+                                                                      opacity: 0.35, depthTest: false }));
+    ghost.renderOrder = 10;
+    front.userData.id = ghost.userData.id = p.id;
+    scene.add(front, ghost);
+    markers.push(front);
+    const label = labelBox.appendChild(document.createElement('div'));
+    label.className = 'lab';
+    label.textContent = p.id;
+    label.title = p.name || '';
+    label.addEventListener('click', () => select(p.id));
+    p.ui = { front, ghost, label };
+  }
+  for (const p of state.values()) makeMarker(p);
+
+  const controls = new OrbitControls(camera, canvas);
+  controls.enableDamping = false;
+  controls.target.copy(center);
+  function resize() {
+    const w = Math.max(view.clientWidth, 1), h = Math.max(view.clientHeight, 1);
+    renderer.setSize(w, h);
+    camera.aspect = w / h;
+    camera.updateProjectionMatrix();
+    dirty = true;
+  }
+  let dirty = true;
+  resize();
+  const vfov = THREE.MathUtils.degToRad(camera.fov);
+  const hfov = 2 * Math.atan(Math.tan(vfov / 2) * camera.aspect);
+  const extent = box.getSize(new THREE.Vector3());          // the front of the box fills the view
+  const distance = 1.12 * Math.max(extent.y / 2 / Math.tan(vfov / 2), extent.x / 2 / Math.tan(hfov / 2)) + extent.z / 2;
+  camera.position.copy(center).add(new THREE.Vector3(0, 0, distance));
+  camera.near = distance / 100;
+  camera.far = distance * 100;
+  camera.updateProjectionMatrix();
+  controls.update();
+  addEventListener('resize', resize);
+  controls.addEventListener('change', () => { dirty = true; });
+  controls.addEventListener('end', () => { occlusionDue = true; });
+
+  // ---- the panel
+  const rowOf = new Map();
+  function buildTable() {
+    const body = $('rows');
+    for (const id of D.order) {
+      const p = state.get(id);
+      if (!p) continue;
+      const tr = body.appendChild(document.createElement('tr'));
+      tr.dataset.id = id;
+      tr.title = p.name || '';
+      for (let i = 0; i < 4; i++) tr.appendChild(document.createElement('td'));
+      tr.children[2].className = 'num';
+      tr.children[3].className = 'note';
+      tr.addEventListener('click', () => select(id));
+      rowOf.set(id, tr);
+    }
+    const box = $('missing');
+    if (!D.missing.length) { box.className = 'none'; box.textContent = 'none'; }
+    for (const m of D.missing) {
+      const div = box.appendChild(document.createElement('div'));
+      div.dataset.id = m.id;
+      div.title = 'Click, then click the surface to place it';
+      div.appendChild(document.createElement('b')).textContent = m.id;
+      div.appendChild(document.createTextNode(m.name ? ' ' + m.name : ''));
+      if (m.reason) {
+        div.appendChild(document.createElement('br'));
+        div.appendChild(document.createElement('span')).textContent = m.reason;
+        div.lastChild.className = 'why';
+      }
+      div.addEventListener('click', () => select(m.id));
+    }
+    $('missinghead').textContent = 'Missing required points (' + D.missing.length + ')';
+  }
+  function refreshPoint(p) {
+    const colour = p.id === selected ? SELECTED : confColor(p.confidence);
+    const shown = !!p.shown;
+    for (const m of [p.ui.front, p.ui.ghost]) {
+      m.visible = shown;
+      m.material.color.set(colour);
+      if (shown) m.position.set(...p.shown);
+      m.scale.setScalar(p.id === selected ? 1.7 : 1);
+    }
+    p.ui.label.classList.toggle('sel', p.id === selected);
+    const tr = rowOf.get(p.id);
+    if (tr) {
+      tr.classList.toggle('sel', p.id === selected);
+      tr.classList.toggle('moved', p.moved);
+      tr.children[0].innerHTML = '';
+      const dot = tr.children[0].appendChild(document.createElement('span'));
+      dot.className = 'sw';
+      dot.style.background = confColor(p.confidence);
+      tr.children[0].appendChild(document.createTextNode(p.id));
+      tr.children[1].textContent = p.vertex !== null ? (p.mesh === null ? '' : p.mesh + ' ') + '#' + p.vertex
+                                                     : (p.position ? 'position' : 'missing');
+      tr.children[2].textContent = p.confidence === null ? '' : p.confidence.toFixed(2);
+      tr.children[3].textContent = p.missing && !p.moved ? 'missing' : (p.reason || '');
+      tr.children[3].title = p.reason || '';
+    }
+    const div = document.querySelector('#missing div[data-id="' + p.id + '"]');
+    if (div) {
+      div.classList.toggle('sel', p.id === selected);
+      div.firstChild.classList.toggle('placed', p.moved);
+    }
+    dirty = true;
+  }
+  function say(text) { statusBar.textContent = text; }
+  function idle() {
+    say('Click a point (or its row), then click the surface to move it there. Drag to turn the head, wheel to zoom.');
+  }
+
+  // ---- editing
+  function select(id) {
+    if (id !== null && !state.has(id)) throw new Error('no point ' + id + ' in this editor');
+    const before = selected;
+    selected = id;
+    if (before && state.has(before)) refreshPoint(state.get(before));
+    if (id === null) { idle(); return; }
+    const p = state.get(id);
+    refreshPoint(p);
+    const tr = rowOf.get(id);
+    if (tr) tr.scrollIntoView({ block: 'nearest' });
+    say('Selected ' + id + (p.name ? ' (' + p.name + ')' : '') + ': click the surface to ' +
+        (p.shown ? 'move' : 'place') + ' it, Esc to cancel.');
+  }
+  function nearestVertex(mesh, xyz) {
+    const w = mesh.userData.world;
+    let best = -1, bestD = Infinity;
+    for (let i = 0; i < w.length; i += 3) {
+      const d = (w[i] - xyz[0]) ** 2 + (w[i + 1] - xyz[1]) ** 2 + (w[i + 2] - xyz[2]) ** 2;
+      if (d < bestD) { bestD = d; best = i / 3; }
+    }
+    return best;
+  }
+  function moveTo(meshName, where) {
+    if (selected === null) throw new Error('select a point first');
+    let mesh = meshName === null || meshName === undefined ? null : meshes.get(meshName);
+    if (meshName != null && !mesh) throw new Error('no mesh ' + meshName + ' in this face');
+    let index;
+    if (Array.isArray(where)) {
+      if (!mesh) {           // the nearest vertex of any mesh
+        let bestD = Infinity;
+        for (const m of meshes.values()) {
+          const i = nearestVertex(m, where), w = m.userData.world;
+          const d = (w[3 * i] - where[0]) ** 2 + (w[3 * i + 1] - where[1]) ** 2 + (w[3 * i + 2] - where[2]) ** 2;
+          if (d < bestD) { bestD = d; mesh = m; index = i; }
+        }
+      } else index = nearestVertex(mesh, where);
+    } else {
+      index = Number(where);
+      if (!mesh || !Number.isInteger(index) || index < 0 || 3 * index >= mesh.userData.world.length)
+        throw new Error('vertex ' + where + ' is not a vertex of ' + meshName);
+    }
+    const p = state.get(selected), w = mesh.userData.world;
+    const keep = ['position', 'mesh', 'vertex', 'confidence', 'shown', 'moved'];
+    history.push({ id: p.id, before: Object.fromEntries(keep.map(k => [k, p[k]])) });
+    const at = [w[3 * index], w[3 * index + 1], w[3 * index + 2]];
+    Object.assign(p, { position: at, mesh: mesh.name, vertex: index, confidence: 1.0, shown: at, moved: true });
+    const id = p.id;
+    select(null);
+    refreshPoint(p);
+    occlusionDue = true;
+    $('undo').disabled = false;
+    say('Moved ' + id + ' to vertex ' + index + ' of ' + mesh.name + '.');
+    return { id, mesh: mesh.name, vertex: index, position: at };
+  }
+  function undo() {
+    const last = history.pop();
+    if (!last) return null;
+    const p = state.get(last.id);
+    Object.assign(p, last.before);
+    refreshPoint(p);
+    occlusionDue = true;
+    $('undo').disabled = history.length === 0;
+    say('Undone: the move of ' + last.id + '.');
+    return last.id;
+  }
+  function save() {
+    const blob = new Blob([documentJson()], { type: 'application/json' });
+    const a = document.createElement('a');
+    a.href = URL.createObjectURL(blob);
+    a.download = D.filename;
+    document.body.appendChild(a);
+    a.click();
+    a.remove();
+    setTimeout(() => URL.revokeObjectURL(a.href), 60000);
+    say('Saved ' + D.filename + (history.length ? ' (' + history.length + ' move' + (history.length > 1 ? 's' : '') + ')' : '') + '.');
+  }
+
+  // ---- the mouse: a click (not a drag) picks a marker, else the surface
+  const raycaster = new THREE.Raycaster();
+  function pick(clientX, clientY) {
+    const r = canvas.getBoundingClientRect();
+    const ndc = new THREE.Vector2((clientX - r.left) / r.width * 2 - 1, -(clientY - r.top) / r.height * 2 + 1);
+    raycaster.setFromCamera(ndc, camera);
+    const hitMarker = raycaster.intersectObjects(markers.filter(m => m.visible), false)[0];
+    const hitSurface = raycaster.intersectObjects(pickable, false)[0];
+    if (hitMarker && (!hitSurface || hitMarker.distance <= hitSurface.distance + 0.01 * size))
+      return { marker: hitMarker.object.userData.id };
+    return hitSurface ? { surface: hitSurface } : {};
+  }
+  let down = null;
+  canvas.addEventListener('pointerdown', e => { if (e.button === 0) down = [e.clientX, e.clientY]; });
+  canvas.addEventListener('pointerup', e => {
+    if (!down || e.button !== 0) return;
+    const moved = Math.hypot(e.clientX - down[0], e.clientY - down[1]);
+    down = null;
+    if (moved > 4) return;
+    const hit = pick(e.clientX, e.clientY);
+    if (hit.marker && hit.marker !== selected) { select(hit.marker); return; }
+    if (!hit.surface) { if (selected === null) idle(); return; }
+    if (selected === null) { say('Select a point first: click its marker, its label or its row.'); return; }
+    // the vertex of the clicked triangle nearest the click
+    const s = hit.surface, mesh = s.object, w = mesh.userData.world;
+    let best = s.face.a, bestD = Infinity;
+    for (const v of [s.face.a, s.face.b, s.face.c]) {
+      const d = (w[3 * v] - s.point.x) ** 2 + (w[3 * v + 1] - s.point.y) ** 2 + (w[3 * v + 2] - s.point.z) ** 2;
+      if (d < bestD) { bestD = d; best = v; }
+    }
+    moveTo(mesh.name, best);
+  });
+  addEventListener('keydown', e => {
+    if (e.key === 'Escape') select(null);
+    if ((e.ctrlKey || e.metaKey) && e.key.toLowerCase() === 'z') { e.preventDefault(); undo(); }
+  });
+  $('undo').addEventListener('click', () => undo());
+  $('save').addEventListener('click', () => save());
+  $('showlabels').addEventListener('change', e => { labelBox.classList.toggle('off', !e.target.checked); });
+
+  // ---- labels follow the markers; ones hidden behind the face are dimmed
+  let occlusionDue = true;
+  const v = new THREE.Vector3(), occluder = new THREE.Raycaster();
+  function updateOcclusion() {
+    occlusionDue = false;
+    for (const p of state.values()) {
+      if (!p.shown) continue;
+      v.set(...p.shown);
+      const toward = camera.position.clone().sub(v);
+      const far = toward.length();
+      occluder.set(v.clone().addScaledVector(toward.normalize(), 0.004 * size), toward);
+      occluder.far = far;
+      p.behind = occluder.intersectObjects(pickable, false).length > 0;
+      p.ui.label.classList.toggle('behind', p.behind);
+    }
+  }
+  function placeLabels() {
+    const w = canvas.clientWidth, h = canvas.clientHeight;
+    for (const p of state.values()) {
+      const lab = p.ui.label;
+      if (!p.shown) { lab.style.display = 'none'; continue; }
+      v.set(...p.shown).project(camera);
+      lab.style.display = v.z > 1 ? 'none' : '';
+      lab.style.left = ((v.x + 1) / 2 * w).toFixed(1) + 'px';
+      lab.style.top = ((1 - v.y) / 2 * h).toFixed(1) + 'px';
+    }
+  }
+  function screenOf(meshName, index) {    // page coordinates of a vertex (or of a point by id)
+    let xyz;
+    if (index === undefined) xyz = state.get(meshName).shown;
+    else { const w = meshes.get(meshName).userData.world; xyz = [w[3 * index], w[3 * index + 1], w[3 * index + 2]]; }
+    const r = canvas.getBoundingClientRect();
+    v.set(...xyz).project(camera);
+    return { x: r.left + (v.x + 1) / 2 * r.width, y: r.top + (1 - v.y) / 2 * r.height };
+  }
+
+  buildTable();
+  for (const p of state.values()) refreshPoint(p);
+  idle();
+  renderer.setAnimationLoop(() => {
+    controls.update();
+    if (occlusionDue) updateOcclusion();
+    if (!dirty) return;
+    dirty = false;
+    placeLabels();
+    renderer.render(scene, camera);
+  });
+  Object.assign(E, {
+    select: id => { select(id); return selected; }, selected: () => selected, moveTo, undo, save,
+    json: documentJson, screenOf, pyFloat, pyStr,
+    points: () => [...state.values()].map(({ id, position, mesh, vertex, confidence, moved }) =>
+      ({ id, position, mesh, vertex, confidence, moved })),
+  });
+  E.ready = true;
+  $('msg').hidden = true;
+  document.body.dataset.ready = '1';
+}
+
+main().catch(e => window.__fail(e && e.message || e));"""

@@ -544,6 +544,7 @@ def find_feature_points(face: FaceModel, *, ids: Optional[Iterable[str]] = None)
         pos[k] = p + (X[nn] - tpl.V[nn]).mean(0)
         resid[k] = float(near_d[nn].mean())
     parts_found = _parts(pieces, s, R, t, X, tpl, pos, tie, reasons)
+    _pupils_in_openings(pos, resid, reasons)
     # results in model coordinates
     inv = lambda p: (np.asarray(p) - t) @ R / s
     conf = _confidence(pos, resid, crisp_ok, reasons)
@@ -708,6 +709,21 @@ def _parts(pieces: _Pieces, s, R, t, X, tpl: _Template, pos, tie, reasons) -> se
             pos["6.4"], tie["6.4"] = Vt[r], r
         found.add(kind)
     return found
+
+
+def _pupils_in_openings(pos, resid, reasons) -> None:
+    """Without an eyeball, a pupil (3.5, 3.6) is put at the centre of its eye opening:
+    the mean of the eye's corners and lid middles.  The FAPU ES0 and cloning's alignment
+    need both pupils on every face (the standard places them with the eyes looking
+    ahead); with no eyeball to move, no eyeball FAP is cloned (see
+    :mod:`mpeg4fba.fba.requirements`), so the pupil's only use is as this landmark."""
+    for fp, eye in (("3.5", ("3.7", "3.11", "3.1", "3.3")), ("3.6", ("3.8", "3.12", "3.2", "3.4"))):
+        if fp in pos or not all(k in pos for k in eye):
+            continue
+        pos[fp] = np.mean([pos[k] for k in eye], axis=0)
+        resid[fp] = float(max(resid.get(k, 0.0) for k in eye))
+        reasons[fp] = (reasons.get(fp, "no eyeball") + "; put at the centre of the eye "
+                       "opening (the mean of its corners and lid middles)")
 
 
 def _confidence(pos, resid, crisp_ok, reasons) -> dict:

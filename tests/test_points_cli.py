@@ -1,0 +1,161 @@
+"""``mpeg4fba points`` and ``clone`` on a head with no point file (issue 18, points 1-2).
+
+The head is a reference head of other proportions exported as a user has it: one OBJ
+mesh (skin, eyes, teeth and tongue welded), or its skin alone, with no feature points.
+The true points are the reference head's own; the heads and their files are made once.
+"""
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+from mpeg4fba.cli import main
+from mpeg4fba.cloning import REQUIRED_POINTS, complete_points
+from mpeg4fba.fba.featurepoints import FeaturePointSet
+from mpeg4fba.formats.face_files import read_face
+from mpeg4fba.formats.fpjson import (read_confidences, read_feature_points_json,
+                                     write_feature_points_json)
+from mpeg4fba.models import reference_head
+
+from test_clone_real_input import one_mesh, write_obj
+
+
+@pytest.fixture(scope="module")
+def head():
+    return reference_head(resolution=0.5, face_width=1.1, jaw=0.9, nose=1.15, seed=4)
+
+
+@pytest.fixture(scope="module")
+def files(tmp_path_factory, head):
+    d = tmp_path_factory.mktemp("points")
+    welded = one_mesh(head, list(head.meshes), [], name="head")
+    write_obj(d / "head.obj", welded)
+    write_obj(d / "skin.obj", one_mesh(head, ["Skin"], [], name="skin"))
+    # a ball: no face on it
+    u, v = np.meshgrid(np.linspace(0, np.pi, 24), np.linspace(0, 2 * np.pi, 48))
+    ball = np.c_[np.sin(u.ravel()) * np.cos(v.ravel()), np.cos(u.ravel()),
+                 np.sin(u.ravel()) * np.sin(v.ravel())] * 0.1
+    from scipy.spatial import ConvexHull
+    hull = ConvexHull(ball)
+    lines = [f"v {x:.6f} {y:.6f} {z:.6f}" for x, y, z in ball]
+    lines += [f"f {a + 1} {b + 1} {c + 1}" for a, b, c in hull.simplices]
+    (d / "ball.obj").write_text("\n".join(lines) + "\n")
+    return d
+
+
+@pytest.fixture(scope="module")
+def found_run(files):
+    r = CliRunner().invoke(main, ["points", str(files / "head.obj"), "-o", str(files / "head.json")])
+    return r
+
+
+def es(head) -> float:
+    return float(np.linalg.norm(head.points["3.5"] - head.points["3.6"]))
+
+
+def test_points_writes_the_sidecar_with_confidences_and_a_picture(files, found_run, head):
+    r = found_run
+    assert r.exit_code == 0, r.output
+    first = r.output.splitlines()[0]
+    assert first.startswith("found ") and "lowest confidence" in first
+    pts, _ = read_feature_points_json(files / "head.json")
+    conf = read_confidences(files / "head.json")
+    assert set(REQUIRED_POINTS) <= set(pts)
+    assert set(conf) == set(pts) and all(0 <= c <= 1 for c in conf.values())
+    png = files / "head.png"
+    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    # found where the head has them: the required points, in % of the eye distance
+    err = np.array([np.linalg.norm(pts[k] - head.points[k]) for k in REQUIRED_POINTS if k != "2.1"])
+    assert np.median(err) / es(head) < 0.03, np.median(err) / es(head)
+
+
+def test_points_sidecar_feeds_clone(files, found_run):
+    assert found_run.exit_code == 0
+    r = CliRunner().invoke(main, ["clone", str(files / "head.obj"), "--target-points",
+                                  str(files / "head.json"), "-o", str(files / "given.wrl")])
+    assert r.exit_code == 0, r.output
+    assert "check: 0 errors" in r.output
+    assert "no feature points given" not in r.output      # the file was used as given
+    assert not (files / "given.points.json").exists()
+
+
+def test_points_edit_writes_the_review_page(files, found_run):
+    r = CliRunner().invoke(main, ["points", str(files / "head.obj"), "--points",
+                                  str(files / "head.json"), "--edit", "-o", str(files / "review.html")])
+    assert r.exit_code == 0, r.output
+    page = (files / "review.html").read_text()
+    assert "3.5" in page and "8.4" in page and "<script" in page
+
+
+def test_points_snap_moves_noisy_crisp_points_back(files, found_run, head):
+    pts, _ = read_feature_points_json(files / "head.json")
+    rng = np.random.default_rng(7)
+    noisy = {k: pts[k] + (rng.normal(0, 0.03 * es(head), 3) if k in ("8.3", "8.4", "9.3") else 0)
+             for k in pts}
+    write_feature_points_json(FeaturePointSet(noisy), files / "noisy.json")
+    r = CliRunner().invoke(main, ["points", str(files / "head.obj"), "--points", str(files / "noisy.json"),
+                                  "--snap", "-o", str(files / "snapped.json"), "--no-preview"])
+    assert r.exit_code == 0, r.output
+    assert r.output.startswith("snapped ")
+    snapped, _ = read_feature_points_json(files / "snapped.json")
+    for k in ("8.3", "8.4", "9.3"):
+        assert np.linalg.norm(snapped[k] - pts[k]) < np.linalg.norm(noisy[k] - pts[k]), k
+
+
+@pytest.mark.parametrize("args, words", [
+    (["--snap"], "--snap moves the points of a file"),
+    (["-o", "x.txt"], "is written as .json"),
+    (["--edit", "-o", "x.json"], "--edit writes a page"),
+    (["--preview", "a.png", "--no-preview"], "not both"),
+])
+def test_points_usage_errors(files, args, words):
+    r = CliRunner().invoke(main, ["points", str(files / "head.obj")] + args)
+    assert r.exit_code == 2 and words in r.output, r.output
+
+
+def test_points_on_a_ball_is_a_clear_error(files):
+    out = files / "ball.json"
+    r = CliRunner().invoke(main, ["points", str(files / "ball.obj"), "-o", str(out)])
+    assert r.exit_code == 1, r.output
+    assert r.output.startswith("mpeg4fba: error: ") and "face" in r.output
+    assert "Traceback" not in r.output and not out.exists()
+
+
+def test_clone_finds_the_points_of_a_head_without_a_point_file(files):
+    out = files / "auto.wrl"
+    r = CliRunner().invoke(main, ["clone", str(files / "skin.obj"), "-o", str(out)])
+    assert r.exit_code == 0, r.output
+    said = [line for line in r.output.splitlines() if "no feature points given" in line]
+    assert len(said) == 1 and "lowest confidence" in said[0] and "auto.points.json" in said[0]
+    assert "check: 0 errors" in r.output
+    pts, _ = read_feature_points_json(files / "auto.points.json")
+    assert set(REQUIRED_POINTS) <= set(pts)
+    assert read_face(out).fat.faps
+
+
+def test_clone_fills_only_the_missing_points(files, found_run, head):
+    pts, _ = read_feature_points_json(files / "head.json")
+    given = {k: head.points[k] for k in REQUIRED_POINTS[:40]}
+    write_feature_points_json(FeaturePointSet(given), files / "some.json")
+    r = CliRunner().invoke(main, ["clone", str(files / "head.obj"), "--target-points",
+                                  str(files / "some.json"), "-o", str(files / "some.wrl")])
+    assert r.exit_code == 0, r.output
+    assert f"40 feature points given: found the {len(REQUIRED_POINTS) - 40} missing" in r.output
+    filled, _ = read_feature_points_json(files / "some.points.json")
+    for k in given:                                       # given points stay as given
+        assert np.allclose(filled[k], given[k])
+
+
+def test_clone_snap_needs_a_point_file(files):
+    r = CliRunner().invoke(main, ["clone", str(files / "head.obj"), "--snap", "-o", str(files / "s.wrl")])
+    assert r.exit_code == 2 and "--snap" in r.output
+
+
+def test_complete_points_keeps_a_complete_face_as_it_is(head):
+    face = reference_head(resolution=0.5)
+    before = face.points
+    report = complete_points(face)
+    assert report.found is None and not report.added and face.points == before

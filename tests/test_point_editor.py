@@ -373,3 +373,22 @@ def test_odd_mesh_names_round_trip(browser, tmp_path):
     e = Editor(browser, path)
     assert e.js("__editor.json()") == dumps_feature_points_json(pts, confidences={"2.1": 0.25})
     assert e.errors == []
+
+
+@pytest.mark.parametrize("view", ["front", "three-quarter", (20.0, -15.0)])
+def test_project_points_lands_where_render_face_draws(view):
+    from mpeg4fba.fba.face import FaceMesh, FaceModel
+    from mpeg4fba.render.preview import project_points, render_face
+    quad = FaceMesh("Skin", [[-1, -1, 0], [1, -1, 0], [1, 1, 0], [-1, 1, 0]], [[0, 1, 2], [0, 2, 3]])
+    face = FaceModel([quad])
+    fit = ((-2, -2, -1), (2, 2, 1))                 # room round the quad
+    image = render_face(face, size=(160, 120), view=view, fit=fit, backend="matplotlib").astype(int)
+    background = image[0, 0]
+    corners = project_points(face, quad.vertices, size=(160, 120), view=view, fit=fit)
+    centre = corners[:, :2].mean(axis=0)
+    for col, row, depth in corners:
+        assert depth > 0
+        inside = np.round(centre + 0.9 * (np.array([col, row]) - centre)).astype(int)
+        outside = np.round(centre + 1.1 * (np.array([col, row]) - centre)).astype(int)
+        assert np.abs(image[inside[1], inside[0]] - background).sum() > 30
+        assert np.abs(image[outside[1], outside[0]] - background).sum() <= 6

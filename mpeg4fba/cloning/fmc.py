@@ -281,7 +281,8 @@ def _check_faces(source: FaceModel, target: FaceModel) -> None:
         raise FeaturePointError("facial motion cloning needs the feature points of the "
                                 "alignment triangulation and 7.1 (REQUIRED_POINTS, listed in "
                                 "the README's 'The feature points a face needs'): "
-                                + "; ".join(problems), point_order(ids))
+                                + "; ".join(problems) + " (complete_points(face) finds the "
+                                "missing ones on its geometry)", point_order(ids))
     for face, which in ((source, "source"), (target, "target")):
         if face.fapu is None:
             raise ValueError(f"the {which} face ({face.name}) has no usable FAPU")

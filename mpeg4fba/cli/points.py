@@ -107,6 +107,7 @@ def _points(head: str, output: str, edit: bool, given: Optional[str], snap: bool
     face = read_face(head, given, lenient=lenient)
     what = os.path.basename(head)
     confidence: dict = {}
+    up = forward = None
     missing: tuple = ()
     reasons: dict = {}
     if given:
@@ -125,6 +126,7 @@ def _points(head: str, output: str, edit: bool, given: Optional[str], snap: bool
         found = find_feature_points(face)
         click.echo(describe_found(found, what, time.perf_counter() - t0))
         points, confidence, missing, reasons = found.points, found.confidence, found.missing, found.reasons
+        up, forward = found.up, found.forward
     # positions are exact; a vertex ref only names the nearest vertex (a reader would
     # move the point onto it), so the sidecar keeps positions only
     from ..fba.featurepoints import FeaturePointSet
@@ -139,9 +141,33 @@ def _points(head: str, output: str, edit: bool, given: Optional[str], snap: bool
         write_feature_points_json(plain, output, confidences=confidence or None)
         if preview:
             from ..render.points import render_points
-            render_points(face, plain, preview, confidences=confidence or None)
+            shown, shown_points = _upright(face, plain, up, forward)
+            render_points(shown, shown_points, preview, confidences=confidence or None)
             written.append(preview)
     click.echo(f"wrote {', '.join(written)}")
+
+
+def _upright(face, points, up, forward) -> tuple:
+    """(face, points) turned so that the head found looks down +z with +y up, as the
+    pictures are drawn (a head with +Z up or facing +X is shown from the front too)."""
+    if up is None or forward is None:
+        return face, points
+    from ..fba.face import FaceMesh, FaceModel
+    import numpy as np
+
+    up = np.asarray(up, float) / np.linalg.norm(up)
+    forward = np.asarray(forward, float) - np.dot(forward, up) * up
+    forward /= np.linalg.norm(forward)
+    R = np.array([np.cross(up, forward), up, forward])      # rows: the face's left, up, forward
+    if np.allclose(R, np.eye(3)):
+        return face, points
+    meshes = [FaceMesh(n, face.world_vertices(n) @ R.T, m.triangles, color=m.color)
+              for n, m in face.meshes.items()]
+    turned = FaceModel(meshes, name=face.name)
+    turned.colors = dict(face.colors)
+    M = np.eye(4)
+    M[:3, :3] = R
+    return turned, points.transformed(M)
 
 
 def _base_points() -> tuple:

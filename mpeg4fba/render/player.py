@@ -218,8 +218,43 @@ def player_html(glb: bytes, *, title: str, faps: Optional[list] = None) -> str:
     licence = _web("LICENSE").decode("utf-8").replace("--", "- -").strip()
     fill = {"LICENSE": licence, "VERSION": THREE_VERSION, "IMPORTMAP": _import_map_json(),
             "GLB": glb_text, "FAPS": _script_json(payload), "JS": _PLAYER_JS,
+            "FAIL": failure_script("__player", "player", "duration: 0, setTime() {}, play() {}, "
+                                   "pause() {}, currentTime() { return 0; }, active() { return []; }"),
             "TITLE": html.escape(str(title))}
     return re.sub(r"@([A-Z]+)@", lambda m: fill[m.group(1)], _TEMPLATE)
+
+
+def failure_script(name: str, what: str, members: str = "") -> str:
+    """The classic script a page of ours starts with: ``window.<name>`` (``ready``,
+    ``error`` and ``members``) for tests, and ``window.__fail`` that shows any error in
+    the page (never a blank page) and in ``document.body.dataset.error``; a page that is
+    not ready within 30 s fails too.
+
+    >>> "window.__editor = {ready: false, error: null};" in failure_script("__editor", "editor")
+    True
+    """
+    extra = f", {members}" if members else ""
+    return _FAIL_JS.replace("@NAME@", name).replace("@WHAT@", what).replace("@MEMBERS@", extra)
+
+
+_FAIL_JS = r"""// A classic script: it runs even where modules cannot, so a failure is never a blank page.
+window.@NAME@ = {ready: false, error: null@MEMBERS@};
+window.__fail = function (text) {
+  text = String(text || 'unknown error');
+  if (/ResizeObserver/.test(text)) return;
+  console.error('@WHAT@:', text);
+  if (window.@NAME@.error) return;
+  window.@NAME@.error = text;
+  document.body.dataset.error = text;
+  const msg = document.getElementById('msg');
+  msg.textContent = 'The face cannot be shown:\n' + text;
+  msg.hidden = false;
+};
+addEventListener('error', e => __fail(e.message || (e.error && e.error.message)));
+addEventListener('unhandledrejection', e => __fail(e.reason && e.reason.message || e.reason));
+if (!(window.HTMLScriptElement && HTMLScriptElement.supports && HTMLScriptElement.supports('importmap')))
+  __fail('this browser has no import maps: open the page in a current Chrome, Edge, Firefox or Safari');
+setTimeout(() => { if (!@NAME@.ready) __fail('the @WHAT@ did not start within 30 s'); }, 30000);"""
 
 
 def write_player(glb: Union[bytes, str, os.PathLike], out_path: Union[str, os.PathLike], **kw) -> Path:
@@ -290,25 +325,7 @@ html,body{margin:0;height:100%;overflow:hidden;background:#8e9196;color:#e8e8e8;
 <script id="glb" type="application/octet-stream">@GLB@</script>
 <script id="fapdata" type="application/json">@FAPS@</script>
 <script>
-// A classic script: it runs even where modules cannot, so a failure is never a blank page.
-window.__player = {ready: false, duration: 0, error: null,
-                   setTime() {}, play() {}, pause() {}, currentTime() { return 0; }, active() { return []; }};
-window.__fail = function (text) {
-  text = String(text || 'unknown error');
-  if (/ResizeObserver/.test(text)) return;
-  console.error('player:', text);
-  if (window.__player.error) return;
-  window.__player.error = text;
-  document.body.dataset.error = text;
-  const msg = document.getElementById('msg');
-  msg.textContent = 'The face cannot be shown:\\n' + text;
-  msg.hidden = false;
-};
-addEventListener('error', e => __fail(e.message || (e.error && e.error.message)));
-addEventListener('unhandledrejection', e => __fail(e.reason && e.reason.message || e.reason));
-if (!(window.HTMLScriptElement && HTMLScriptElement.supports && HTMLScriptElement.supports('importmap')))
-  __fail('this browser has no import maps: open the page in a current Chrome, Edge, Firefox or Safari');
-setTimeout(() => { if (!__player.ready) __fail('the player did not start within 30 s'); }, 30000);
+@FAIL@
 </script>
 <script type="module">
 @JS@

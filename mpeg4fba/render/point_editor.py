@@ -49,7 +49,7 @@ from .._atomic import atomic_write
 from ..fba.featurepoints import FeaturePointSet, normalise_id, point_order
 from ..fba.tables import FEATURE_POINTS
 from ..formats.fpjson import FORMAT_NAME, FORMAT_VERSION, dumps_feature_points_json
-from .player import THREE_VERSION, vendored_modules
+from .player import THREE_VERSION, failure_script, vendored_modules
 
 __all__ = ["point_editor_html", "write_point_editor", "editor_data"]
 
@@ -178,7 +178,8 @@ def point_editor_html(face, points: FeaturePointSet, *, confidences: Optional[Ma
     """
     data = _payload(face, points, confidences, missing, reasons, fapu, units, str(filename))
     fill = {"LICENSE": _licence(), "VERSION": THREE_VERSION, "IMPORTMAP": _import_map_json(),
-            "DATA": _script_json(data), "JS": _EDITOR_JS, "TITLE": html.escape(str(title))}
+            "DATA": _script_json(data), "JS": _EDITOR_JS, "TITLE": html.escape(str(title)),
+            "FAIL": failure_script("__editor", "editor")}
     return re.sub(r"@([A-Z]+)@", lambda m: fill[m.group(1)], _TEMPLATE)
 
 
@@ -278,24 +279,7 @@ label{font-size:12px;color:#ccd}
 (this page needs JavaScript, ES modules and import maps)</div>
 <script id="editor-data" type="application/json">@DATA@</script>
 <script>
-// A classic script: it runs even where modules cannot, so a failure is never a blank page.
-window.__editor = {ready: false, error: null};
-window.__fail = function (text) {
-  text = String(text || 'unknown error');
-  if (/ResizeObserver/.test(text)) return;
-  console.error('editor:', text);
-  if (window.__editor.error) return;
-  window.__editor.error = text;
-  document.body.dataset.error = text;
-  const msg = document.getElementById('msg');
-  msg.textContent = 'The face cannot be shown:\\n' + text;
-  msg.hidden = false;
-};
-addEventListener('error', e => __fail(e.message || (e.error && e.error.message)));
-addEventListener('unhandledrejection', e => __fail(e.reason && e.reason.message || e.reason));
-if (!(window.HTMLScriptElement && HTMLScriptElement.supports && HTMLScriptElement.supports('importmap')))
-  __fail('this browser has no import maps: open the page in a current Chrome, Edge, Firefox or Safari');
-setTimeout(() => { if (!__editor.ready) __fail('the editor did not start within 30 s'); }, 30000);
+@FAIL@
 </script>
 <script type="module">
 @JS@

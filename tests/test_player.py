@@ -20,11 +20,9 @@ from mpeg4fba.render.player import (MODULES, THREE_VERSION, embedded_glb, import
                                     module_specifiers, player_html, vendored_modules,
                                     write_player)
 
+from _browser import CHROMIUM, CHROMIUM_ARGS, browser, close_pages  # noqa: F401  (fixtures)
+
 WEB = Path(player.__file__).parent / "web"
-CHROMIUM = "/usr/bin/chromium"
-CHROMIUM_ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
-                 "--disable-background-networking", "--disable-component-update", "--disable-sync",
-                 "--use-gl=swiftshader", "--enable-unsafe-swiftshader"]
 BACKGROUND = (0x8E, 0x91, 0x96)          # the page's scene background
 VIEWPORT = {"width": 800, "height": 600}
 TARGETS = ["open_jaw[0,1024]", "viseme:PP[0,63]"]
@@ -234,40 +232,6 @@ def test_write_player_is_atomic(glb, tmp_path, monkeypatch):
 
 
 # --------------------------------------------------------------------------- in Chromium
-
-
-def _browser_missing() -> str:
-    if not os.access(CHROMIUM, os.X_OK):
-        return f"Debian's chromium is not installed ({CHROMIUM}; apt-get install chromium)"
-    try:
-        import playwright.sync_api  # noqa: F401
-    except ImportError:
-        return "the Python package playwright is not installed (pip install playwright)"
-    return ""
-
-
-@pytest.fixture(scope="module")
-def browser():
-    why = _browser_missing()
-    if why:
-        pytest.skip(why)
-    from playwright.sync_api import sync_playwright
-    with sync_playwright() as p:
-        b = p.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS)
-        try:
-            yield b
-        finally:
-            b.close()
-
-
-@pytest.fixture(autouse=True)
-def _close_pages(request):
-    """Close every page a test opened: an open player keeps animating (software WebGL),
-    and a dozen of them left open slowed the later tests several times over."""
-    yield
-    if "browser" in request.fixturenames:
-        for context in request.getfixturevalue("browser").contexts:
-            context.close()
 
 
 class Page:

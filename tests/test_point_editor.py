@@ -22,10 +22,8 @@ from mpeg4fba.models import reference_head
 from mpeg4fba.render.point_editor import editor_data, point_editor_html, write_point_editor
 from mpeg4fba.render.points import NO_CONFIDENCE, confidence_color, points_image, render_points
 
-CHROMIUM = "/usr/bin/chromium"
-CHROMIUM_ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
-                 "--disable-background-networking", "--disable-component-update", "--disable-sync",
-                 "--use-gl=swiftshader", "--enable-unsafe-swiftshader"]
+from _browser import browser, close_pages  # noqa: F401  (fixtures)
+
 VIEWPORT = {"width": 1200, "height": 800}
 MISSING = ("10.9", "10.10")
 REASONS = {"10.9": "no ear found on the left", "10.10": "no ear found on the right",
@@ -185,39 +183,6 @@ def test_confidence_colours_run_red_yellow_green():
 
 
 # --------------------------------------------------------------------------- in Chromium
-
-
-def _browser_missing() -> str:
-    if not os.access(CHROMIUM, os.X_OK):
-        return f"Debian's chromium is not installed ({CHROMIUM}; apt-get install chromium)"
-    try:
-        import playwright.sync_api  # noqa: F401
-    except ImportError:
-        return "the Python package playwright is not installed (pip install playwright)"
-    return ""
-
-
-@pytest.fixture(scope="module")
-def browser():
-    why = _browser_missing()
-    if why:
-        pytest.skip(why)
-    from playwright.sync_api import sync_playwright
-    with sync_playwright() as p:
-        b = p.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS)
-        try:
-            yield b
-        finally:
-            b.close()
-
-
-@pytest.fixture(autouse=True)
-def _close_pages(request):
-    """Close every page a test opened (an open page keeps drawing in software WebGL)."""
-    yield
-    if "browser" in request.fixturenames:
-        for context in request.getfixturevalue("browser").contexts:
-            context.close()
 
 
 @pytest.fixture(scope="module")

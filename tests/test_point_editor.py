@@ -340,6 +340,26 @@ def test_odd_mesh_names_round_trip(browser, tmp_path):
     assert e.errors == []
 
 
+def test_a_z_up_head_opens_on_its_face(browser, tmp_path):
+    """A head with +Z up facing +X (up and forward given, as ``mpeg4fba points`` passes
+    the frame it found): the nose tip in the middle, the face's left eye on the
+    viewer's right, the eyes above the mouth."""
+    from mpeg4fba.fba.face import FaceMesh, FaceModel
+    head = reference_head(resolution=0.5)
+    R = np.array([[0, 0, 1], [1, 0, 0], [0, 1, 0]], float)        # y up -> z up, z -> x
+    skin = head.meshes["Skin"]
+    face = FaceModel([FaceMesh("Skin", head.world_vertices("Skin") @ R.T, skin.triangles)])
+    ids = ("9.3", "3.5", "3.6", "8.1")
+    pts = FeaturePointSet({k: head.points[k] @ R.T for k in ids})
+    path = write_point_editor(tmp_path / "z.html", face, pts, up=R @ [0, 1, 0], forward=R @ [0, 0, 1])
+    e = Editor(browser, path)
+    at = {k: e.js("k => __editor.screenOf(k)", k) for k in ids}
+    assert abs(at["9.3"]["x"] - (at["3.5"]["x"] + at["3.6"]["x"]) / 2) < 10
+    assert at["3.5"]["x"] > at["9.3"]["x"] > at["3.6"]["x"]
+    assert at["3.5"]["y"] < at["9.3"]["y"] < at["8.1"]["y"]
+    assert e.errors == []
+
+
 @pytest.mark.parametrize("view", ["front", "three-quarter", (20.0, -15.0)])
 def test_project_points_lands_where_render_face_draws(view):
     from mpeg4fba.fba.face import FaceMesh, FaceModel

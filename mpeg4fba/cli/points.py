@@ -135,7 +135,7 @@ def _points(head: str, output: str, edit: bool, given: Optional[str], snap: bool
     if edit:
         from ..render.point_editor import write_point_editor
         write_point_editor(output, face, plain, confidences=confidence or None, missing=missing,
-                           reasons=reasons, title=f"feature points of {what}")
+                           reasons=reasons, title=f"feature points of {what}", up=up, forward=forward)
     else:
         from ..formats.fpjson import write_feature_points_json
         write_feature_points_json(plain, output, confidences=confidence or None)

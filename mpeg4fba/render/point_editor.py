@@ -155,11 +155,28 @@ def _payload(face, points: FeaturePointSet, confidences: Optional[Mapping], miss
     }
 
 
+def _view(up, forward) -> dict:
+    """The head's up and forward as unit vectors, forward made square to up."""
+    u = np.array([0.0, 1.0, 0.0] if up is None else up, float).reshape(-1)
+    f = np.array([0.0, 0.0, 1.0] if forward is None else forward, float).reshape(-1)
+    if u.shape != (3,) or f.shape != (3,) or not (np.isfinite(u).all() and np.isfinite(f).all()):
+        raise ValueError("up and forward are 3 finite numbers each")
+    u = u / (np.linalg.norm(u) or 1.0)
+    f = f - np.dot(f, u) * u
+    if np.linalg.norm(f) < 1e-9 or np.linalg.norm(u) < 1e-9:
+        raise ValueError("up and forward must be two different directions")
+    return {"up": u.tolist(), "forward": (f / np.linalg.norm(f)).tolist()}
+
+
 def point_editor_html(face, points: FeaturePointSet, *, confidences: Optional[Mapping] = None,
                       missing: Iterable = (), reasons: Optional[Mapping] = None,
                       title: str = "Feature points", fapu=None, units: Optional[str] = None,
-                      filename: str = "points.json") -> str:
+                      filename: str = "points.json", up: Optional[Iterable[float]] = None,
+                      forward: Optional[Iterable[float]] = None) -> str:
     """One self-contained HTML page to review and move ``points`` on ``face``.
+
+    ``up`` and ``forward`` (model coordinates; default +y and +z) say how the head
+    stands, so that the page opens on its face (a +Z-up head, one facing +X).
 
     ``confidences`` (``{id: 0..1}``) colour the points, ``missing`` lists required
     points not found (``reasons`` says why, ``{id: text}``; a reason for a given point
@@ -177,6 +194,7 @@ def point_editor_html(face, points: FeaturePointSet, *, confidences: Optional[Ma
     ('9.3', None, 'Skin', 2, 0.5, [1.0, 1.0, 0.0])
     """
     data = _payload(face, points, confidences, missing, reasons, fapu, units, str(filename))
+    data["view"] = _view(up, forward)
     fill = {"LICENSE": _licence(), "VERSION": THREE_VERSION, "IMPORTMAP": _import_map_json(),
             "DATA": _script_json(data), "JS": _EDITOR_JS, "TITLE": html.escape(str(title)),
             "FAIL": failure_script("__editor", "editor")}
@@ -380,6 +398,11 @@ async function main() {
   scene.background = new THREE.Color(0x8e9196);
   scene.add(new THREE.HemisphereLight(0xf4f6ff, 0x4a4540, 1.5));
   const camera = new THREE.PerspectiveCamera(30, 1, 0.01, 100);
+  // the head's own up and forward (a +Z-up head opens on its face too); before the
+  // orbit controls, which take the camera's up when made
+  const UP = new THREE.Vector3(...D.view.up), FWD = new THREE.Vector3(...D.view.forward);
+  const SIDE = new THREE.Vector3().crossVectors(UP, FWD);
+  camera.up.copy(UP);
   const key = new THREE.DirectionalLight(0xffffff, 2.0);
   key.position.set(-0.5, 0.7, 0.6);
   key.target.position.set(0, 0, -1);
@@ -456,9 +479,11 @@ async function main() {
   resize();
   const vfov = THREE.MathUtils.degToRad(camera.fov);
   const hfov = 2 * Math.atan(Math.tan(vfov / 2) * camera.aspect);
-  const extent = box.getSize(new THREE.Vector3());          // the front of the box fills the view
+  const boxSize = box.getSize(new THREE.Vector3());         // the front of the box fills the view
+  const along = d => Math.abs(boxSize.x * d.x) + Math.abs(boxSize.y * d.y) + Math.abs(boxSize.z * d.z);
+  const extent = new THREE.Vector3(along(SIDE), along(UP), along(FWD));
   const distance = 1.12 * Math.max(extent.y / 2 / Math.tan(vfov / 2), extent.x / 2 / Math.tan(hfov / 2)) + extent.z / 2;
-  camera.position.copy(center).add(new THREE.Vector3(0, 0, distance));
+  camera.position.copy(center).addScaledVector(FWD, distance);
   camera.near = distance / 100;
   camera.far = distance * 100;
   camera.updateProjectionMatrix();

@@ -175,6 +175,7 @@ class _Template:
     openings: dict         # name -> (centre, {landmark: skin vertex}) of the mouth and eyes
     es: float              # metres
     profile: dict          # the mid-line points of its profile (:func:`_profile_points`)
+    eyes: dict             # its lid-margin points (:func:`_eye_points`)
 
 
 @lru_cache(maxsize=1)
@@ -212,7 +213,11 @@ def _template() -> _Template:
         if got is not None:
             openings[name] = (c, {k: int(v) for k, v in got.items()})
     prof = _profile_points(_profile(V, T, 0.6, -2.5), 0.0)
-    return _Template(V, T, pts, skin_index, parts, sample, face, openings, es, prof)
+    eyes = {}
+    for name, keys in _EYE_KEYS.items():
+        got = _eye_opening(V, T, 0.5 * (pts[keys[0]] + pts[keys[1]]), name == "left eye")
+        eyes.update({k: got[r] for k, r in zip(keys, ("out", "in", "top", "bottom")) if r in got})
+    return _Template(V, T, pts, skin_index, parts, sample, face, openings, es, prof, eyes)
 
 
 # the template's opening widths (eye separations): an eye's, the mouth's (by box size)
@@ -472,6 +477,171 @@ def _profile_points(prof: _Profile, eye_y: float) -> dict:
     se = top + int(np.argmin(zz[top:tip + 1]))
     t2 = _farthest(yy, zz, se, sn)
     out["9.3"] = np.array([0.0, yy[t2], zz[t2]])
+    return out
+
+
+# -- the eye openings, seen from the front ----------------------------------------------------
+#: Cell size (eye separations) of the front-view depth maps of the eyes: 0.01 ES.
+DEPTH_CELL = 0.01
+
+
+def _depth_map(Vt: np.ndarray, T: np.ndarray, lo: np.ndarray, hi: np.ndarray,
+               cell: float = DEPTH_CELL) -> np.ndarray:
+    """The skin seen from the front (+z) in the box ``lo``..``hi`` (template frame):
+    (nx, ny) grid of the most forward z of the triangles over each cell centre, NaN where
+    no triangle is.  Each triangle in the box is sampled on a barycentric lattice fine
+    enough for the cell size (its longest edge over half a cell), so a decimated mesh's
+    large triangles leave no gaps."""
+    nx = int(np.ceil((hi[0] - lo[0]) / cell))
+    ny = int(np.ceil((hi[1] - lo[1]) / cell))
+    out = np.full((nx, ny), -np.inf)
+    P = Vt[T]                                             # (m, 3, 3)
+    inb = ((P[:, :, 0].max(1) >= lo[0]) & (P[:, :, 0].min(1) <= hi[0])
+           & (P[:, :, 1].max(1) >= lo[1]) & (P[:, :, 1].min(1) <= hi[1])
+           & (P[:, :, 2].max(1) >= lo[2]))
+    P = P[inb]
+    if not len(P):
+        return np.full((nx, ny), np.nan)
+    edge = np.linalg.norm(P - P[:, [1, 2, 0]], axis=2).max(1)
+    nsub = np.clip(np.ceil(edge / (0.5 * cell)).astype(int), 1, 64)
+    for n in np.unique(nsub):
+        tri = P[nsub == n]
+        i, j = np.meshgrid(np.arange(n + 1), np.arange(n + 1), indexing="ij")
+        keep = i + j <= n
+        a, b = i[keep] / n, j[keep] / n
+        w = np.c_[1 - a - b, a, b]                        # (k, 3)
+        Q = np.einsum("kv,mvc->mkc", w, tri).reshape(-1, 3)
+        ix = np.floor((Q[:, 0] - lo[0]) / cell).astype(int)
+        iy = np.floor((Q[:, 1] - lo[1]) / cell).astype(int)
+        ok = (ix >= 0) & (ix < nx) & (iy >= 0) & (iy < ny) & (Q[:, 2] >= lo[2])
+        np.maximum.at(out, (ix[ok], iy[ok]), Q[ok, 2])
+    out[~np.isfinite(out)] = np.nan
+    return out
+
+
+#: Each eye's lid-margin points: outer corner, inner corner, upper and lower lid middles.
+_EYE_KEYS = {"left eye": ("3.7", "3.11", "3.1", "3.3"), "right eye": ("3.12", "3.8", "3.2", "3.4")}
+
+
+def _eye_points(Vt: np.ndarray, T: np.ndarray, tpl) -> dict:
+    """The lid-margin points of both eyes (:func:`_eye_opening`), each eye searched round
+    where the template's eye lies after the rigid fit; an eye without an opening of an
+    eye's size there gives none."""
+    out = {}
+    for name, keys in _EYE_KEYS.items():
+        c = 0.5 * (tpl.points[keys[0]] + tpl.points[keys[1]])
+        got = _eye_opening(Vt, T, c, name == "left eye")
+        out.update({k: got[r] for k, r in zip(keys, ("out", "in", "top", "bottom")) if r in got})
+    return out
+
+
+def _groove_end(D: np.ndarray, i: int, j: int, step: int, reach: int = 3,
+                depth: float = 0.01) -> Optional[tuple]:
+    """Following the groove of the depth map ``D`` (front-view z, -inf where empty) from
+    the opening's extreme cell (i, j) outward along x (``step`` = +-1): at each column the
+    deepest cell within two cells of the last one's height, kept while it lies ``depth``
+    (0.01 ES, 0.6 mm) or more behind the mean of the cells ``reach`` rows above and below
+    it (a groove, not the smooth skin beyond the corner); the last groove cell, or None."""
+    last = None
+    ny = D.shape[1]
+    for _ in range(int(0.15 / DEPTH_CELL)):
+        i += step
+        if not 0 <= i < D.shape[0]:
+            break
+        js = np.arange(max(j - 2, reach), min(j + 3, ny - reach))
+        if not len(js):
+            break
+        col = D[i, js]
+        if not np.isfinite(col).any():
+            continue                      # still in the opening
+        jb = int(js[np.argmax(np.where(np.isfinite(col), -col, -np.inf))])
+        z, up, dn = D[i, jb], D[i, jb + reach], D[i, jb - reach]
+        if not (np.isfinite(up) and np.isfinite(dn)) or 0.5 * (up + dn) - z < depth:
+            break
+        last, j = (i, jb), jb
+    return last
+
+
+def _eye_opening(Vt: np.ndarray, T: np.ndarray, centre: np.ndarray, left: bool) -> dict:
+    """The lid margins of the eye round ``centre`` (template frame) from the opening the
+    skin leaves as seen from the front: {"out", "in", "top", "bottom"} -> point on the
+    skin's front edge, or {} when no opening of an eye's size is there.
+
+    The opening is the connected empty part of the front-view depth map
+    (:func:`_depth_map`, skin only: an eyeball is another piece) nearest the centre, 0.15
+    to 0.6 ES wide and less tall than wide; its corners are its lateral extremes, its lid
+    middles the top and bottom of its column half way between them, each taken on the
+    skin just outside the opening (the most forward surface there: the lid margin's front
+    edge, not the hole's boundary, which can lie a fifth of an eye separation deeper)."""
+    from scipy import ndimage
+    half = np.array([0.4, 0.3])
+    lo = np.array([centre[0] - half[0], centre[1] - half[1], centre[2] - 0.45])
+    hi = np.array([centre[0] + half[0], centre[1] + half[1]])
+    D = _depth_map(Vt, T, lo, hi)
+    empty = np.isnan(D)
+    lab, n = ndimage.label(empty)
+    if not n:
+        return {}
+    ci = int((centre[0] - lo[0]) / DEPTH_CELL)
+    cj = int((centre[1] - lo[1]) / DEPTH_CELL)
+    best, best_d = None, np.inf
+    border = set(np.unique(np.r_[lab[0], lab[-1], lab[:, 0], lab[:, -1]]).tolist())
+    for k in range(1, n + 1):
+        if k in border:
+            continue
+        ii, jj = np.nonzero(lab == k)
+        w = (ii.max() - ii.min() + 1) * DEPTH_CELL
+        h = (jj.max() - jj.min() + 1) * DEPTH_CELL
+        if not (0.15 <= w <= 0.6 and h < w):
+            continue
+        dd = np.hypot(ii.mean() - ci, jj.mean() - cj)
+        if dd < best_d:
+            best, best_d = (ii, jj), dd
+    if best is None:
+        return {}
+    ii, jj = best
+    x = lo[0] + (ii + 0.5) * DEPTH_CELL
+    y = lo[1] + (jj + 0.5) * DEPTH_CELL
+    filled = np.where(np.isnan(D), -np.inf, D)
+
+    def front(i, j, di, dj):
+        # the first filled cell outward from (i, j), its centre at the front surface
+        for _ in range(6):
+            i, j = i + di, j + dj
+            if not (0 <= i < D.shape[0] and 0 <= j < D.shape[1]):
+                break
+            if np.isfinite(filled[i, j]):
+                return np.array([lo[0] + (i + 0.5) * DEPTH_CELL, lo[1] + (j + 0.5) * DEPTH_CELL,
+                                 filled[i, j]])
+        return None
+
+    out = {}
+    imax, imin = ii.max(), ii.min()
+    jr = int(np.round(jj[ii == imax].mean()))
+    jl = int(np.round(jj[ii == imin].mean()))
+    pr, pl = front(imax, jr, 1, 0), front(imin, jl, -1, 0)
+    # the inner corner: the lids meet medially beyond the opening, over a groove (a
+    # caruncle's pocket) that can reach a twentieth of an eye separation further; the
+    # corner is where that groove ends
+    med = -1 if left else 1
+    ic, jc = (imin, jl) if left else (imax, jr)
+    groove = _groove_end(filled, ic, jc, med)
+    if groove is not None:
+        g = np.array([lo[0] + (groove[0] + 0.5) * DEPTH_CELL,
+                      lo[1] + (groove[1] + 0.5) * DEPTH_CELL, filled[groove]])
+        if left:
+            pl = g
+        else:
+            pr = g
+    icol = int(np.round(0.5 * (imax + imin)))
+    col = jj[ii == icol]
+    if not len(col) or pr is None or pl is None:
+        return {}
+    pt, pb = front(icol, col.max(), 0, 1), front(icol, col.min(), 0, -1)
+    if pt is None or pb is None:
+        return {}
+    out["out"], out["in"] = (pr, pl) if left else (pl, pr)
+    out["top"], out["bottom"] = pt, pb
     return out
 
 
@@ -766,7 +936,8 @@ def find_feature_points(face: FaceModel, *, ids: Optional[Iterable[str]] = None)
     # the mid-line profile's points (nose, lips), then the template's skin bent onto the
     # target's, held at them
     prof_pts = _profile_points(_profile(Vt, ST, 0.6, -2.5), 0.0)
-    X = _register(tpl, Vt, ST, prof_pts)
+    eye_pts = _eye_points(Vt, ST, tpl)
+    X = _register(tpl, Vt, ST, {**prof_pts, **eye_pts})
     reasons: dict = {}
     pos: dict = {}       # id -> template-frame position on the target
     tie: dict = {}       # id -> stacked vertex index
@@ -788,7 +959,14 @@ def find_feature_points(face: FaceModel, *, ids: Optional[Iterable[str]] = None)
         near = cKDTree(Vt).query(np.array(list(prof_pts.values())))[1]
         for (k, p), v in zip(prof_pts.items(), near):
             pos[k], tie[k] = p, skin_ids[v]
-    crisp_ok = _refine(Vt, ST, pos, tie, skin_ids, reasons, "9.3" in prof_pts) | set(prof_pts)
+    if eye_pts:
+        tri, bary, _ = closest_points(np.array(list(eye_pts.values())), Vt, ST)
+        on = np.einsum("nk,nkc->nc", bary, Vt[ST[tri]])
+        near = cKDTree(Vt).query(on)[1]
+        for k, p, v in zip(eye_pts, on, near):
+            pos[k], tie[k] = p, skin_ids[v]
+    crisp_ok = (_refine(Vt, ST, pos, tie, skin_ids, reasons, "9.3" in prof_pts)
+                | set(prof_pts) | set(eye_pts))
     # 7.1 and other off-surface points: moved with the registration's displacement nearby
     for k, p in tpl.points.items():
         if k in pos or k in _PART_OF:
@@ -834,14 +1012,17 @@ def _register(tpl: _Template, Vt: np.ndarray, ST: np.ndarray,
     profile = profile or {}
     tip = tpl.skin_index["9.3"]
     for k, p in profile.items():
-        if k in tpl.profile and k != "2.3":
-            src.append(int(np.argmin(np.linalg.norm(tpl.V - tpl.profile[k], axis=1))))
+        ref = tpl.profile.get(k, tpl.eyes.get(k))
+        if ref is not None and k != "2.3":
+            src.append(int(np.argmin(np.linalg.norm(tpl.V - ref, axis=1))))
             dst.append(p)
     if not src:
         src, dst = [tip], [tpl.V[tip]]
     n_mid = len(src)
     edge = _boundary_vertices(ST, len(Vt))
     for name, (c, lm) in tpl.openings.items():
+        if name != "mouth" and any(k in profile for k in _EYE_KEYS[name]):
+            continue                 # the eye's lid margins are held already
         got = _opening_landmarks(Vt, edge, c, _opening_boxes(tpl.points)[name][1])
         if got is None:
             continue
@@ -853,7 +1034,7 @@ def _register(tpl: _Template, Vt: np.ndarray, ST: np.ndarray,
     start = tpl.V.copy()
     # a thin-plate warp only when the landmarks surround the face (mouth and both eyes):
     # from fewer (an eye and the nose) it extrapolates wildly
-    if len(keep) - np.sum(keep < n_mid) == 4 * len(tpl.openings):
+    if len(keep) >= 1 + 4 * len(tpl.openings):
         start = feature_warp(tpl.V[src], np.array(dst), tpl.V)
     start[src] = np.array(dst)
     return register_surface(tpl.V, tpl.T, start, src, Vt, ST)

@@ -17,7 +17,7 @@ import pytest
 
 from mpeg4fba.cloning import (CRISP_POINTS, FaceNotFoundError, FoundPoints,
                               find_feature_points, snap_points)
-from mpeg4fba.cloning.detect import _menton
+from mpeg4fba.cloning.detect import _menton, _profile, _profile_points
 from mpeg4fba.fba.face import FaceMesh, FaceModel
 from mpeg4fba.fba.featurepoints import FeaturePointSet
 from mpeg4fba.models import reference_head
@@ -59,14 +59,19 @@ def _moved(face: FaceModel, M: np.ndarray, scale: float, drop=(), weld=False) ->
 
 
 def _errors(face: FaceModel, found: FoundPoints, truth_face: FaceModel) -> dict:
-    """Point id -> error in % ES0, 2.1 against the menton rule on the true skin."""
+    """Point id -> error in % ES0, 2.1 against the menton rule (the profile's, as
+    :func:`mpeg4fba.cloning.detect._profile_points` reads it) on the true skin."""
     es = float(np.linalg.norm(face.points["3.5"] - face.points["3.6"]))
     truth = {k: face.points[k] for k in face.points}
-    # the menton on the true mesh, in the head's own frame, carried like the others
+    # the menton on the true mesh, in the head's own frame (eye line at y = 0, mid plane
+    # at x = 0), carried like the others
     src_es = float(np.linalg.norm(truth_face.points["3.5"] - truth_face.points["3.6"]))
-    V = truth_face.world_vertices("Skin") / src_es
-    pts = {k: truth_face.points[k] / src_es for k in ("8.2", "2.10")}
-    menton = _menton(V, truth_face.meshes["Skin"].triangles, pts) * src_es
+    eyes = 0.5 * (truth_face.points["3.5"] + truth_face.points["3.6"]) * [1, 1, 0] / src_es
+    V = truth_face.world_vertices("Skin") / src_es - eyes
+    T = truth_face.meshes["Skin"].triangles
+    prof = _profile_points(_profile(V, T, 0.6, -2.5), 0.0)
+    menton = ((prof["2.1"] if "2.1" in prof else _menton(
+        V, T, {k: truth_face.points[k] / src_es - eyes for k in ("8.2", "2.10")})) + eyes) * src_es
     scale = es / src_es
     M = _last_turn
     truth["2.1"] = menton @ M.T * scale

@@ -464,6 +464,19 @@ def _profile_points(prof: _Profile, eye_y: float) -> dict:
     if fold > lo + 4:
         i8 = lo + 2 + int(np.argmin(d2[lo + 2:fold - 1]))
         out["8.2"] = np.array([0.0, yy[i8], zz[i8]])
+    # 2.1 (menton; the module docstring's convention): from under the chin (where the
+    # profile has fallen 0.4 ES behind the chin's front, 0.25 ES or more below the lips'
+    # meeting) back up the chin's underside to where it turns 45 degrees from facing down
+    # to facing forward (the lower lip's underside can be as steep, so not walking down)
+    a0 = lo + int(0.25 / PROFILE_STEP)
+    if a0 < len(zz) - 2:
+        front = np.maximum.accumulate(zz[a0:])
+        under = np.flatnonzero(zz[a0:] < front - 0.4)
+        if len(under):
+            m = a0 + int(under[0])
+            while m - 1 > a0 and (zz[m - 2] - zz[m]) / (2 * PROFILE_STEP) >= 1.0:
+                m -= 1
+            out["2.1"] = np.array([0.0, yy[m], zz[m]])
     # subnasale: furthest behind the chord tip -> upper lip
     a, b = np.array([yy[tip], zz[tip]]), np.array([yy[ul], zz[ul]])
     d = b - a
@@ -1071,7 +1084,8 @@ def find_feature_points(face: FaceModel, *, ids: Optional[Iterable[str]] = None)
         near = cKDTree(Vt).query(on)[1]
         for k, p, v in zip(eye_pts, on, near):
             pos[k], tie[k] = p, skin_ids[v]
-    crisp_ok = (_refine(Vt, ST, pos, tie, skin_ids, reasons, "9.3" in prof_pts)
+    crisp_ok = (_refine(Vt, ST, pos, tie, skin_ids, reasons, "9.3" in prof_pts,
+                        "2.1" in prof_pts)
                 | set(prof_pts) | set(eye_pts))
     # 7.1 and other off-surface points: moved with the registration's displacement nearby
     for k, p in tpl.points.items():
@@ -1148,7 +1162,8 @@ def _register(tpl: _Template, Vt: np.ndarray, ST: np.ndarray,
     return register_surface(tpl.V, tpl.T, start, src, Vt, ST)
 
 
-def _refine(Vt, ST, pos, tie, skin_ids, reasons, prof_has_tip: bool = False) -> set:
+def _refine(Vt, ST, pos, tie, skin_ids, reasons, prof_has_tip: bool = False,
+            prof_has_chin: bool = False) -> set:
     """Move the crisp points onto the crisp geometry near them (template frame); the ids
     moved.  Nose tip 9.3: the most forward vertex within 0.25 ES of where the registration
     put it; chin 2.1: the menton rule (module docstring) on the target's skin."""
@@ -1158,7 +1173,7 @@ def _refine(Vt, ST, pos, tie, skin_ids, reasons, prof_has_tip: bool = False) -> 
         v = near[np.argmax(Vt[near, 2])]
         pos["9.3"], tie["9.3"] = Vt[v], skin_ids[v]
         done.add("9.3")
-    if "8.2" in pos:
+    if "8.2" in pos and not prof_has_chin:
         m = _menton(Vt, ST, {"8.2": pos["8.2"], "2.1": pos["2.1"]})
         if np.linalg.norm(m - pos["2.1"]) < 0.5:
             v = int(np.argmin(np.linalg.norm(Vt - m, axis=1)))

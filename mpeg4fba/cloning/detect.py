@@ -540,8 +540,10 @@ def _depth_map(Vt: np.ndarray, T: np.ndarray, lo: np.ndarray, hi: np.ndarray,
 #: found, then dropped along z onto the skin's front.  Each entry:
 #: ``id -> (frame, a, b)``; the frames (:func:`_convention_points`):
 #:
-#: - ``eye``: origin the eye's inner corner, unit the eye's width (inner to outer corner,
-#:   in the face's plane), ``a`` along it (outward), ``b`` square to it (up);
+#: - ``eye``: origin the eye's centre (the mean of its corners and lid middles), ``a``
+#:   along the line from the other eye's centre (outward), ``b`` square to it (up), in
+#:   units of half the outer canthi's distance (3.7-3.12: a long base, so a corner's
+#:   error hardly turns or scales it);
 #: - ``chin``: ``x = x(2.1) + a (x(corner) - x(2.1))``, ``y`` likewise with ``b``, the
 #:   corner the mouth's outer corner (8.3/8.4) of that side;
 #: - ``lip``: ``x = x(mid) + a (x(corner) - x(mid))``, ``y = y(corner) + b (y(mid) -
@@ -551,12 +553,13 @@ def _depth_map(Vt: np.ndarray, T: np.ndarray, lo: np.ndarray, hi: np.ndarray,
 #:
 #: The proportions are the means over 20 random ICT-FaceKit identities (seeds 101-120 of
 #: ``benchmarks/ict.py``'s identity draw, none of them used to judge the detector); in
-#: brackets the standard deviation of ``a`` and ``b`` over them.  The brows [0.04-0.07
-#: eye widths: 2-3 % ES] vary most: where a person's eyebrows are is not in the mesh.
+#: brackets the standard deviation of ``a`` and ``b`` over them.  The brows [0.02-0.04
+#: half canthal widths: 1-2.5 % ES] vary most: where a person's eyebrows are is not in
+#: the mesh.
 CONVENTION = {
-    "4.1": ("eye", -0.180, 1.036),     # inner brow end       [0.056, 0.073]
-    "4.3": ("eye", 0.828, 1.097),      # brow's top           [0.038, 0.072]
-    "4.5": ("eye", 1.561, 0.623),      # outer brow end       [0.053, 0.061]
+    "4.1": ("eye", -0.464, 0.562),     # inner brow end       [0.017, 0.030]
+    "4.3": ("eye", 0.126, 0.640),      # brow's top           [0.025, 0.031]
+    "4.5": ("eye", 0.577, 0.393),      # outer brow end       [0.029, 0.036]
     "2.11": ("chin", 0.596, 0.075),    # chin corner          [0.033, 0.011]
     "8.5": ("lip", 0.618, 0.776),      # upper lip, half way  [0.017, 0.049]
     "8.10": ("lip", 0.288, 1.069),     # Cupid's bow peak     [0.012, 0.027]
@@ -596,20 +599,20 @@ def _convention_points(Vt: np.ndarray, T: np.ndarray, pos: dict, crisp: set) -> 
     """The :data:`CONVENTION` points (and their mirror partners) from the crisp points in
     ``pos`` (template frame; only those in ``crisp`` are used), on the skin's front."""
     want = {**{k: (k, 1.0) for k in CONVENTION}, **{k: (m, -1.0) for k, m in _CONVENTION_RIGHT.items()}}
-    eye = {1.0: ("3.11", "3.7"), -1.0: ("3.8", "3.12")}
     corner = {1.0: "8.3", -1.0: "8.4"}
     xy = {}
     for k, (rule, side) in want.items():
         frame, a, b = CONVENTION[rule]
         if frame == "eye":
-            i, o = eye[side]
-            if i not in crisp or o not in crisp:
+            if not all(e in crisp for e in _EYE_KEYS["left eye"] + _EYE_KEYS["right eye"]):
                 continue
-            u = (pos[o] - pos[i])[:2]
-            w = np.linalg.norm(u)
-            u = u / w
-            n = np.array([-u[1], u[0]]) * side        # up for both eyes
-            xy[k] = pos[i][:2] + a * w * u + b * w * n
+            cl = np.mean([pos[e] for e in _EYE_KEYS["left eye"]], axis=0)[:2]
+            cr = np.mean([pos[e] for e in _EYE_KEYS["right eye"]], axis=0)[:2]
+            u = (cl - cr) / np.linalg.norm(cl - cr)
+            n = np.array([-u[1], u[0]])                  # up
+            unit = 0.5 * np.linalg.norm((pos["3.7"] - pos["3.12"])[:2])
+            c = cl if side > 0 else cr
+            xy[k] = c + unit * (side * a * u + b * n)
         elif frame == "chin":
             c = corner[side]
             if "2.1" not in crisp or c not in crisp:
@@ -644,13 +647,15 @@ INNER_CORNER = 0.875
 
 
 def _groove(D: np.ndarray, i: int, j: int, step: int, reach: int = 3,
-            depth: float = 0.01) -> list:
+            depth: float = 0.01, slack: int = 3) -> list:
     """The cells (i, j) of the groove of the depth map ``D`` (front-view z, -inf where
     empty) followed from (i, j) along x (``step`` = +-1): at each column the deepest cell
     within two cells of the last one's height (an empty cell is deepest: an opening),
     while it lies ``depth`` (0.01 ES, 0.6 mm) or more behind the mean of the cells
-    ``reach`` rows above and below it (a groove, not the smooth skin beyond its end)."""
-    out = []
+    ``reach`` rows above and below it (a groove, not the smooth skin beyond its end).
+    Up to ``slack`` weaker columns in a row are crossed (a decimated mesh's facets make a
+    shallow groove flicker); the groove ends at its last strong cell."""
+    out, weak = [], []
     ny = D.shape[1]
     for _ in range(D.shape[0]):
         i += step
@@ -663,8 +668,13 @@ def _groove(D: np.ndarray, i: int, j: int, step: int, reach: int = 3,
         z, up, dn = D[i, jb], D[i, jb + reach], D[i, jb - reach]
         if np.isfinite(z) and (not (np.isfinite(up) and np.isfinite(dn))
                                or 0.5 * (up + dn) - z < depth):
-            break
-        out.append((i, jb))
+            weak.append((i, jb))
+            if len(weak) > slack:
+                break
+        else:
+            out.extend(weak)
+            weak = []
+            out.append((i, jb))
         j = jb
     return out
 
@@ -760,10 +770,12 @@ def _groove_end(D: np.ndarray, i: int, j: int, step: int, reach: int = 3,
     the opening's extreme cell (i, j) outward along x (``step`` = +-1): at each column the
     deepest cell within two cells of the last one's height, kept while it lies ``depth``
     (0.01 ES, 0.6 mm) or more behind the mean of the cells ``reach`` rows above and below
-    it (a groove, not the smooth skin beyond the corner); the last groove cell, or None."""
+    it (a groove, not the smooth skin beyond the corner), for 0.07 ES at most (a
+    caruncle's pocket reaches 0.04-0.06 ES; on a coarse mesh the side of the nose can
+    look like a groove going on); the last groove cell, or None."""
     last = None
     ny = D.shape[1]
-    for _ in range(int(0.15 / DEPTH_CELL)):
+    for _ in range(int(0.07 / DEPTH_CELL)):
         i += step
         if not 0 <= i < D.shape[0]:
             break
@@ -1189,7 +1201,9 @@ def find_feature_points(face: FaceModel, *, ids: Optional[Iterable[str]] = None)
     crisp_ok = (_refine(Vt, ST, pos, tie, skin_ids, reasons, "9.3" in prof_pts,
                         "2.1" in prof_pts)
                 | set(prof_pts) | set(eye_pts))
-    conv = _convention_points(Vt, ST, pos, crisp_ok)
+    # from the crisp points, or where the registration put them when the geometry had
+    # no mark (a mouth without a groove keeps the template's corners)
+    conv = _convention_points(Vt, ST, pos, set(pos))
     if conv:
         near = cKDTree(Vt).query(np.array(list(conv.values())))[1]
         for (k, p), v in zip(conv.items(), near):

@@ -4,7 +4,8 @@
 Route (each step a function below):
 
 1. **Pieces** (:func:`_pieces`): every mesh cut into connected components; the skin is the
-   largest component, the others are candidate parts (eyeballs, teeth, tongue, lashes...).
+   component of the largest area, the others are candidate parts (eyeballs, teeth,
+   tongue, lashes...).
 2. **Head frame** (:func:`_head_frame`): the reference head's skin
    (:func:`mpeg4fba.models.reference_head`, the template, which carries all 84 points) is
    fitted to the target's skin by a trimmed, two-way similarity ICP (rotation, translation,
@@ -908,9 +909,10 @@ def _pieces(face: FaceModel) -> _Pieces:
                                 "feature points on")
     V, T = np.vstack(verts), np.vstack(tris)
     comp = np.concatenate(comp)
-    # the skin: the component with the most triangles (the head is the biggest piece)
-    tri_count = np.bincount(comp[T[:, 0]], minlength=ncomp)
-    skin = int(np.argmax(tri_count))
+    # the skin: the component with the largest area (the head is the biggest piece; by
+    # triangle count a decimated skin can lose to a finely meshed mouth interior)
+    area = 0.5 * np.linalg.norm(np.cross(V[T[:, 1]] - V[T[:, 0]], V[T[:, 2]] - V[T[:, 0]]), axis=1)
+    skin = int(np.argmax(np.bincount(comp[T[:, 0]], weights=area, minlength=ncomp)))
     return _Pieces(V, T, np.concatenate(mesh_of), np.concatenate(local), comp, names, skin)
 
 

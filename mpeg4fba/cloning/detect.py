@@ -408,6 +408,8 @@ def _profile_points(prof: _Profile, eye_y: float) -> dict:
     out = {}
     peaks, _ = find_peaks(zz, prominence=0.005)
     peaks = peaks[peaks >= start]
+    # the upper lip's front can be all but flat (a philtrum hardly hollow): any bump
+    lip_peaks, _ = find_peaks(zz, prominence=0.0005)
     tip = None
     for p in peaks:
         after = zz[p:]
@@ -422,8 +424,8 @@ def _profile_points(prof: _Profile, eye_y: float) -> dict:
     fallen = np.flatnonzero(zz[tip:] < zz[tip] - 0.15)
     if not len(fallen):
         return out
-    below = peaks[peaks > tip + fallen[0]]
-    if len(below) < 2:
+    below = lip_peaks[lip_peaks > tip + fallen[0]]
+    if not len(below):
         return out
     ul = below[0]
     out["8.1"] = np.array([0.0, yy[ul], zz[ul]])

@@ -645,7 +645,8 @@ def _convention_points(Vt: np.ndarray, T: np.ndarray, pos: dict, crisp: set) -> 
 #: contact groove: 0.875 (the inner corners sit an eighth of the mouth's half width
 #: inside the commissures: 0.86-0.89 on ICT-FaceKit identities, measured on the mean
 #: face and four random identities; a closed mouth's contact line has no geometric mark
-#: there).  An open mouth's inner corners are its opening's lateral ends instead.
+#: there, and a slit between the lips seen from the front ends anywhere from a third to
+#: two thirds of the way out, so it marks nothing either).
 INNER_CORNER = 0.875
 
 
@@ -686,9 +687,8 @@ def _mouth_points(Vt: np.ndarray, T: np.ndarray, stomion: np.ndarray) -> dict:
     """The mouth's corners from the lips' contact groove seen from the front (template
     frame): the groove (:func:`_groove`) of the skin's depth map followed from the
     stomion (the profile's lips' meeting) to each side; its ends are the commissures
-    (8.3, 8.4: the outer corners); the inner corners (2.4, 2.5) are the opening's
-    lateral ends when the groove runs through an opening seen from the front, else the
-    groove's points :data:`INNER_CORNER` of the way out; 2.6-2.9 (the inner lips'
+    (8.3, 8.4: the outer corners); the inner corners (2.4, 2.5) are the groove's points
+    :data:`INNER_CORNER` of the way out; 2.6-2.9 (the inner lips'
     midpoints) on the groove half way to the inner corners (its edges above and below
     when it is open there).  {} without a groove a mouth's width (0.3 to 1.4 ES) whose
     ends lie symmetrically about the mid line (within 15 % of its width)."""
@@ -725,13 +725,10 @@ def _mouth_points(Vt: np.ndarray, T: np.ndarray, stomion: np.ndarray) -> dict:
         p = at(ie, je)
         if p is not None:
             out[outer] = p
-        open_cells = [k for k, (i, j) in enumerate(g) if not np.isfinite(F[i, j])]
-        # an opening: empty cells past half the groove (a slit between the lips' sheets
-        # near the middle is no open mouth)
-        if open_cells and open_cells[-1] > 0.5 * len(g):
-            k = open_cells[-1]
-        else:
-            k = int(np.argmin([abs(abs(cx(i)) - INNER_CORNER * abs(cx(ie))) for i, _ in g]))
+        # (not the end of an opening seen from the front: lips modelled as two sheets
+        # leave a slit a third to two thirds of the way out, and ICT's inner corners stay
+        # 0.045-0.055 ES inside the commissures whether or not it is there)
+        k = int(np.argmin([abs(abs(cx(i)) - INNER_CORNER * abs(cx(ie))) for i, _ in g]))
         ic, jc = g[k]
         p = at(ic, jc, 1) if not np.isfinite(F[ic, jc]) else at(ic, jc)
         if p is not None:

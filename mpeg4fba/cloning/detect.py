@@ -460,12 +460,15 @@ def _profile_points(prof: _Profile, eye_y: float) -> dict:
         up = lo = ul + (firsts[0] if firsts else int(np.argmax(c)))
     out["2.2"] = np.array([0.0, yy[up], rz[up] if np.isfinite(rz[up]) else zz[up]])
     out["2.3"] = np.array([0.0, yy[lo], rz[lo] if np.isfinite(rz[lo]) else zz[lo]])
-    # 8.2: the lower lip's rim, the most convex point between the lips' meeting and the
-    # labiomental fold (the deepest point within 0.4 ES below it)
-    end = min(lo + int(0.4 / PROFILE_STEP), len(zz) - 1)
-    fold = lo + int(np.argmin(zz[lo:end + 1]))
-    if fold > lo + 4:
-        i8 = lo + 2 + int(np.argmin(d2[lo + 2:fold - 1]))
+    # 8.2: the lower lip's rim, the most convex point between the lower lip's front and
+    # the labiomental fold (the deepest point within 0.35 ES below it)
+    # (from the lower lip's front, the most forward point within 0.2 ES below the lips'
+    # meeting: the smoothed profile just below a parting still dips into the gap)
+    ll = lo + int(np.argmax(zz[lo:min(lo + int(0.2 / PROFILE_STEP), len(zz) - 1) + 1]))
+    end = min(ll + int(0.35 / PROFILE_STEP), len(zz) - 1)
+    fold = ll + int(np.argmin(zz[ll:end + 1]))
+    if fold > ll + 2:
+        i8 = ll + int(np.argmin(d2[ll:fold]))
         out["8.2"] = np.array([0.0, yy[i8], zz[i8]])
     # 2.1 (menton; the module docstring's convention): from under the chin (where the
     # profile has fallen 0.4 ES behind the chin's front, 0.25 ES or more below the lips'

@@ -377,7 +377,7 @@ def _farthest(yy: np.ndarray, zz: np.ndarray, i: int, j: int) -> int:
     return i + int(np.argmax((seg - a) @ n))
 
 
-def _profile_points(prof: _Profile, eye_y: float) -> dict:
+def _profile_points(prof: _Profile, eye_y: float, lips_ok=None) -> dict:
     """Mid-line points read off the profile (template frame), walking down from the eye
     line ``eye_y``: {"9.3", "9.15", "8.1", "2.2", "2.3", "8.2"} where found.
 
@@ -458,6 +458,22 @@ def _profile_points(prof: _Profile, eye_y: float) -> dict:
         peaks_c, _ = find_peaks(c)
         firsts = [p for p in peaks_c if p in set(strong.tolist())]
         up = lo = ul + (firsts[0] if firsts else int(np.argmax(c)))
+    if lips_ok is not None:
+        # an upper lip that does not bulge gives no bump: its first bump was then the
+        # lower lip's, and the lips' contact lies above it: a crease between 0.3 ES below
+        # the tip (the tip to the stomion is 0.4 ES or more: nose below the tip, then
+        # philtrum; a philtrum's crease lies higher) and that bump from which a groove
+        # runs the mouth's width
+        f = tip + int(fallen[0])
+        a0 = tip + int(0.3 / PROFILE_STEP)
+        if ul > a0 + 2:
+            pk, _ = find_peaks(d2[a0:ul])
+            for p in pk:
+                if d2[a0 + p] > 0 and lips_ok(np.array([0.0, yy[a0 + p], zz[a0 + p]])):
+                    up = lo = a0 + p
+                    ul = _farthest(yy, zz, f, up)
+                    out["8.1"] = np.array([0.0, yy[ul], zz[ul]])
+                    break
     out["2.2"] = np.array([0.0, yy[up], rz[up] if np.isfinite(rz[up]) else zz[up]])
     out["2.3"] = np.array([0.0, yy[lo], rz[lo] if np.isfinite(rz[lo]) else zz[lo]])
     # 8.2: the lower lip's rim, the most convex point between the lower lip's front and
@@ -693,7 +709,7 @@ def _mouth_points(Vt: np.ndarray, T: np.ndarray, stomion: np.ndarray) -> dict:
     (8.3, 8.4: the outer corners); the inner corners (2.4, 2.5) are the groove's points
     :data:`INNER_CORNER` of the way out; 2.6-2.9 (the inner lips'
     midpoints) on the groove half way to the inner corners (its edges above and below
-    when it is open there).  {} without a groove a mouth's width (0.3 to 1.4 ES) whose
+    when it is open there).  {} without a groove a mouth's width (0.45 to 1.4 ES) whose
     ends lie symmetrically about the mid line (within 15 % of its width)."""
     lo = np.array([-0.75, stomion[1] - 0.2, stomion[2] - 0.6])
     hi = np.array([0.75, stomion[1] + 0.2])
@@ -709,7 +725,7 @@ def _mouth_points(Vt: np.ndarray, T: np.ndarray, stomion: np.ndarray) -> dict:
         sides[name] = g
     width = (sides["left"][-1][0] - sides["right"][-1][0]) * DEPTH_CELL
     skew = (sides["left"][-1][0] + sides["right"][-1][0] - 2 * i0) * DEPTH_CELL
-    if not 0.3 <= width <= 1.4 or abs(skew) > 0.15 * width:
+    if not 0.45 <= width <= 1.4 or abs(skew) > 0.15 * width:
         return {}
     cx = lambda i: lo[0] + (i + 0.5) * DEPTH_CELL
     cy = lambda j: lo[1] + (j + 0.5) * DEPTH_CELL
@@ -1170,7 +1186,8 @@ def find_feature_points(face: FaceModel, *, ids: Optional[Iterable[str]] = None)
     Vt = s * SV @ R.T + t
     # the mid-line profile's points (nose, lips), then the template's skin bent onto the
     # target's, held at them
-    prof_pts = _profile_points(_profile(Vt, ST, 0.6, -2.5), 0.0)
+    prof_pts = _profile_points(_profile(Vt, ST, 0.6, -2.5), 0.0,
+                               lambda p: bool(_mouth_points(Vt, ST, p)))
     eye_pts = _eye_points(Vt, ST, tpl)
     if "2.2" in prof_pts:
         eye_pts.update(_mouth_points(Vt, ST, 0.5 * (prof_pts["2.2"] + prof_pts["2.3"])))

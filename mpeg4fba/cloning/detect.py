@@ -297,6 +297,13 @@ def _menton(V: np.ndarray, T: np.ndarray, pts: dict) -> np.ndarray:
 #: Step (eye separations) of the mid-plane profile's height grid: 0.01 ES (about 0.6 mm),
 #: finer than any ICT or reference-head edge that crosses the mid plane at the lips.
 PROFILE_STEP = 0.01
+#: How far (eye separations) the mid-plane profile must fall below a peak, before rising
+#: as high again, for the peak to be the nose tip: 0.1.  ICT noses fall 0.14-0.35 to the
+#: subnasale (the least where the upper lip stands almost as far forward as the tip); a
+#: glabella falls 0.02-0.08 to the nasion, a dorsal hump less.  The nose is the first
+#: such peak below the eye line, so an upper lip that falls as far to the stomion, below
+#: it, is never taken for it.
+NOSE_FALL = 0.1
 
 
 def _plane_cut(V: np.ndarray, T: np.ndarray, x0: float = 0.0) -> tuple:
@@ -415,13 +422,13 @@ def _profile_points(prof: _Profile, eye_y: float, lips_ok=None) -> dict:
         after = zz[p:]
         higher = np.flatnonzero(after > zz[p])
         seg = after[:higher[0]] if len(higher) else after
-        if zz[p] - seg.min() >= 0.15:
+        if zz[p] - seg.min() >= NOSE_FALL:
             tip = p
             break
     if tip is None:
         return out
     out["9.3"] = np.array([0.0, yy[tip], zz[tip]])
-    fallen = np.flatnonzero(zz[tip:] < zz[tip] - 0.15)
+    fallen = np.flatnonzero(zz[tip:] < zz[tip] - NOSE_FALL)
     if not len(fallen):
         return out
     below = lip_peaks[lip_peaks > tip + fallen[0]]
@@ -656,7 +663,11 @@ def _convention_points(Vt: np.ndarray, T: np.ndarray, pos: dict, crisp: set) -> 
         return {}
     keys = list(xy)
     z = _front_at(Vt, T, np.array([xy[k] for k in keys]))
-    return {k: np.array([*xy[k], zk]) for k, zk in zip(keys, z) if np.isfinite(zk)}
+    # on the face's front, not far behind where the registration put the point (one
+    # dropped into an opening would find the inside of the head, an eye separation or
+    # more behind; an outer brow end lies up to half of one behind the template's)
+    return {k: np.array([*xy[k], zk]) for k, zk in zip(keys, z)
+            if np.isfinite(zk) and (k not in pos or zk > pos[k][2] - 0.6)}
 
 
 #: Where Multi-PIE's inner lip corners (landmarks 60/64, MPEG-4 2.4/2.5) lie on a closed

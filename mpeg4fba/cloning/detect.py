@@ -1078,10 +1078,11 @@ def _mid_plane(Vt: np.ndarray, T: np.ndarray, iterations: int = 6) -> tuple:
         M = np.einsum("nk,nkc->nc", bary, W[T[tri]])
         Tn = np.cross(W[T[tri, 1]] - W[T[tri, 0]], W[T[tri, 2]] - W[T[tri, 0]])
         Tn /= np.maximum(np.linalg.norm(Tn, axis=1), 1e-300)[:, None]
-        # point to plane: the mirror in x = a + b y + c z (small b, c) moves a mirrored
-        # point by 2 (a + b y + c z) along x; that move should cancel its distance to the
-        # match's tangent plane
-        X = 2 * Tn[:, :1] * np.c_[np.ones(len(P)), P[:, 1], P[:, 2]]
+        # point to plane: the mirror of p in x = a + b y + c z (small b, c) is, to first
+        # order, its mirror in x = 0 moved by 2 (a + b y + c z) along x and 2 x (0, b, c);
+        # that move should cancel its distance to the match's tangent plane
+        X = 2 * np.c_[Tn[:, 0], Tn[:, 0] * P[:, 1] + P[:, 0] * Tn[:, 1],
+                      Tn[:, 0] * P[:, 2] + P[:, 0] * Tn[:, 2]]
         rhs = -np.einsum("nc,nc->n", Tn, Pm - M)
         keep = np.ones(len(P), dtype=bool)
         for _ in range(2):
@@ -1094,6 +1095,8 @@ def _mid_plane(Vt: np.ndarray, T: np.ndarray, iterations: int = 6) -> tuple:
         sn = np.linalg.norm(v)
         Rn = _turn(v / sn, np.arctan2(sn, n[0])) if sn > 1e-12 else np.eye(3)
         o = np.array([coef[0], 0.0, 0.0])            # on the plane
+        if np.arctan2(sn, n[0]) > np.radians(10) or abs(coef[0]) > 0.25:
+            break     # no plane near this one fits (a front too flat across to tell)
         A, b = Rn @ A, Rn @ b - Rn @ o
     return A, b
 

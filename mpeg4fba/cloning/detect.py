@@ -1,7 +1,7 @@
 """Finding the MPEG-4 feature points on a head mesh that has none, from its geometry alone
 (no model weights, no network).
 
-Route (each step a function below):
+Route (each step a function below), the face's structure found in order:
 
 1. **Pieces** (:func:`_pieces`): every mesh cut into connected components; the skin is the
    component of the largest area, the others are candidate parts (eyeballs, teeth,
@@ -10,17 +10,34 @@ Route (each step a function below):
    (:func:`mpeg4fba.models.reference_head`, the template, which carries all 84 points) is
    fitted to the target's skin by a trimmed, two-way similarity ICP (rotation, translation,
    one scale) from each of the 24 axis-aligned up/forward hypotheses; the best fit is
-   kept, which also tilts it into place (faces up to 20 degrees off an axis).
+   kept, which also tilts it into place (faces up to 20 degrees off an axis).  The nose
+   tip read off the mid-plane profile (step 4) then sets the translation.
 3. **Is it a face** (:func:`_face_checks`): the fit must be close, the skin bilaterally
-   symmetric about the fitted mid plane, and there must be a mouth and eyes (openings or
-   concave creases); else :class:`FaceNotFoundError` says which was missing.
-4. **Registration**: the template's skin is bent onto the target's
-   (:func:`~mpeg4fba.cloning.surface.register_surface`, coarse to fine) and every template
-   point is carried to the closest point of the target's surface.
-5. **Crisp points** (:func:`_refine`): the points the geometry defines sharply are moved
-   to that geometry (nose tip, chin, mouth corners and mid lips, eye corners and lid
-   middles).
-6. **Parts**: eyeballs (the pupil: the most forward point of a closed round component in
+   symmetric about the fitted mid plane, and a nose must stand out; else
+   :class:`FaceNotFoundError` says which was missing.  **Mid plane** (:func:`_mid_plane`):
+   the plane of the skin's mirror symmetry, by a point-to-plane mirror fit, turned to
+   x = 0.
+4. **Mid line** (:func:`_profile`, :func:`_profile_points`): the front of the skin's cut by
+   the mid plane, read from the eye line down: the nose tip (the first peak that falls
+   like a nose: an upper lip as forward as the nose is never taken for it), subnasale,
+   the upper lip's front, the lips' meeting (a crease or a parting; the crease from which
+   a groove runs the mouth's width), the lower lip's vermilion edge, the menton.
+5. **Eyes** (:func:`_eye_opening`): each eye's opening seen from the front (a depth map of
+   the skin, :func:`_depth_map`: a hole, or the skin's edge round an eyeball that is
+   another piece): corners at its lateral ends (the inner one where the groove beyond it
+   ends), lid middles at its top and bottom, on the lid margin's front edge.
+6. **Mouth** (:func:`_mouth_points`): the lips' contact groove seen from the front,
+   followed from the stomion: commissures at its ends, inner corners and inner-lip
+   midpoints along it.
+7. **Registration**: the template's skin is bent onto the target's
+   (:func:`~mpeg4fba.cloning.surface.register_surface`, coarse to fine), held at the
+   points of steps 4-6, and every template point is carried to the closest point of the
+   target's surface; the points of steps 4-6 then replace the carried ones.
+8. **Convention points** (:data:`CONVENTION`, :func:`_convention_points`): the points no
+   geometry marks (brows, chin corners, the outer lips' intermediate points, the nostril
+   base's ends) placed by the 68-landmark convention's proportions relative to the points
+   found, dropped onto the skin.
+9. **Parts**: eyeballs (the pupil: the most forward point of a closed round component in
    the eye), teeth and tongue (components where the template's are), when present.
 
 Units: the work is done in the template's frame (x the face's left, y up, z forward) in
@@ -32,9 +49,11 @@ centimetres, 1 in millimetres.
 Chin convention: 2.1 ("bottom of the chin") is the *menton*, the lowest point of the chin
 on the mid line as seen from the front (the lowest point of the jaw line of a face photo,
 Multi-PIE landmark 8), where the chin's profile turns from facing forward to facing down:
-on the mid-plane profile below the lower lip, the point whose surface normal points 45
-degrees between forward and down.  The reference head's own 2.1 lies further back, under
-the jaw; the landmark convention is what users (and ICT-FaceKit) mean and what they can see.
+on the mid-plane profile, walking back up from under the chin, the first point where the
+profile is no steeper than 45 degrees (:func:`_profile_points`; :func:`_menton`, the
+same by the surface normals, when the profile has no chin).  The reference head's own 2.1
+lies further back, under the jaw; the landmark convention is what users (and ICT-FaceKit)
+mean and what they can see.
 
 Accuracy today (not yet the issue's goals of median 1.5 / p95 4 / max 8 % ES0), on the
 39 ICT-FaceKit points its landmarks define, 12 random identities full and decimated to
@@ -481,8 +500,15 @@ def _profile_points(prof: _Profile, eye_y: float, lips_ok=None) -> dict:
                     ul = _farthest(yy, zz, f, up)
                     out["8.1"] = np.array([0.0, yy[ul], zz[ul]])
                     break
-    out["2.2"] = np.array([0.0, yy[up], rz[up] if np.isfinite(rz[up]) else zz[up]])
-    out["2.3"] = np.array([0.0, yy[lo], rz[lo] if np.isfinite(rz[lo]) else zz[lo]])
+    def front(i):
+        # the raw front near bin i (the smoothed one dips into a parting's gap), unless
+        # that is the inside of the mouth or head seen through the gap
+        r = rz[max(i - 2, 0):i + 3]
+        r = r[np.isfinite(r)]
+        return r.max() if len(r) and r.max() > zz[i] - 0.15 else zz[i]
+
+    out["2.2"] = np.array([0.0, yy[up], front(up)])
+    out["2.3"] = np.array([0.0, yy[lo], front(lo)])
     # 8.2: the lower lip's rim, the most convex point between the lower lip's front and
     # the labiomental fold (the deepest point within 0.35 ES below it)
     # (from the lower lip's front, the most forward point within 0.2 ES below the lips'

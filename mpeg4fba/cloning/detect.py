@@ -501,11 +501,13 @@ def _profile_points(prof: _Profile, eye_y: float, lips_ok=None) -> dict:
                     out["8.1"] = np.array([0.0, yy[ul], zz[ul]])
                     break
     def front(i):
-        # the raw front near bin i (the smoothed one dips into a parting's gap), unless
-        # that is the inside of the mouth or head seen through the gap
-        r = rz[max(i - 2, 0):i + 3]
-        r = r[np.isfinite(r)]
-        return r.max() if len(r) and r.max() > zz[i] - 0.15 else zz[i]
+        # the raw front at bin i, or the nearest bin's within two (the smoothed one dips
+        # into a parting's gap), unless that is the inside of the mouth or head seen
+        # through the gap
+        for o in (0, -1, 1, -2, 2):
+            if 0 <= i + o < len(rz) and np.isfinite(rz[i + o]) and rz[i + o] > zz[i] - 0.15:
+                return rz[i + o]
+        return zz[i]
 
     out["2.2"] = np.array([0.0, yy[up], front(up)])
     out["2.3"] = np.array([0.0, yy[lo], front(lo)])

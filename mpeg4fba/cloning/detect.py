@@ -1,25 +1,43 @@
 """Finding the MPEG-4 feature points on a head mesh that has none, from its geometry alone
 (no model weights, no network).
 
-Route (each step a function below):
+Route (each step a function below), the face's structure found in order:
 
 1. **Pieces** (:func:`_pieces`): every mesh cut into connected components; the skin is the
-   largest component, the others are candidate parts (eyeballs, teeth, tongue, lashes...).
+   component of the largest area, the others are candidate parts (eyeballs, teeth,
+   tongue, lashes...).
 2. **Head frame** (:func:`_head_frame`): the reference head's skin
    (:func:`mpeg4fba.models.reference_head`, the template, which carries all 84 points) is
    fitted to the target's skin by a trimmed, two-way similarity ICP (rotation, translation,
    one scale) from each of the 24 axis-aligned up/forward hypotheses; the best fit is
-   kept, which also tilts it into place (faces up to 20 degrees off an axis).
+   kept, which also tilts it into place (faces up to 20 degrees off an axis).  The nose
+   tip read off the mid-plane profile (step 4) then sets the translation.
 3. **Is it a face** (:func:`_face_checks`): the fit must be close, the skin bilaterally
-   symmetric about the fitted mid plane, and there must be a mouth and eyes (openings or
-   concave creases); else :class:`FaceNotFoundError` says which was missing.
-4. **Registration**: the template's skin is bent onto the target's
-   (:func:`~mpeg4fba.cloning.surface.register_surface`, coarse to fine) and every template
-   point is carried to the closest point of the target's surface.
-5. **Crisp points** (:func:`_refine`): the points the geometry defines sharply are moved
-   to that geometry (nose tip, chin, mouth corners and mid lips, eye corners and lid
-   middles).
-6. **Parts**: eyeballs (the pupil: the most forward point of a closed round component in
+   symmetric about the fitted mid plane, and a nose must stand out; else
+   :class:`FaceNotFoundError` says which was missing.  **Mid plane** (:func:`_mid_plane`):
+   the plane of the skin's mirror symmetry, by a point-to-plane mirror fit, turned to
+   x = 0.
+4. **Mid line** (:func:`_profile`, :func:`_profile_points`): the front of the skin's cut by
+   the mid plane, read from the eye line down: the nose tip (the first peak that falls
+   like a nose: an upper lip as forward as the nose is never taken for it), subnasale,
+   the upper lip's front, the lips' meeting (a crease or a parting; the crease from which
+   a groove runs the mouth's width), the lower lip's vermilion edge, the menton.
+5. **Eyes** (:func:`_eye_opening`): each eye's opening seen from the front (a depth map of
+   the skin, :func:`_depth_map`: a hole, or the skin's edge round an eyeball that is
+   another piece): corners at its lateral ends (the inner one where the groove beyond it
+   ends), lid middles at its top and bottom, on the lid margin's front edge.
+6. **Mouth** (:func:`_mouth_points`): the lips' contact groove seen from the front,
+   followed from the stomion: commissures at its ends, inner corners and inner-lip
+   midpoints along it.
+7. **Registration**: the template's skin is bent onto the target's
+   (:func:`~mpeg4fba.cloning.surface.register_surface`, coarse to fine), held at the
+   points of steps 4-6, and every template point is carried to the closest point of the
+   target's surface; the points of steps 4-6 then replace the carried ones.
+8. **Convention points** (:data:`CONVENTION`, :func:`_convention_points`): the points no
+   geometry marks (brows, chin corners, the outer lips' intermediate points, the nostril
+   base's ends) placed by the 68-landmark convention's proportions relative to the points
+   found, dropped onto the skin.
+9. **Parts**: eyeballs (the pupil: the most forward point of a closed round component in
    the eye), teeth and tongue (components where the template's are), when present.
 
 Units: the work is done in the template's frame (x the face's left, y up, z forward) in
@@ -31,17 +49,23 @@ centimetres, 1 in millimetres.
 Chin convention: 2.1 ("bottom of the chin") is the *menton*, the lowest point of the chin
 on the mid line as seen from the front (the lowest point of the jaw line of a face photo,
 Multi-PIE landmark 8), where the chin's profile turns from facing forward to facing down:
-on the mid-plane profile below the lower lip, the point whose surface normal points 45
-degrees between forward and down.  The reference head's own 2.1 lies further back, under
-the jaw; the landmark convention is what users (and ICT-FaceKit) mean and what they can see.
+on the mid-plane profile, walking back up from under the chin, the first point where the
+profile is no steeper than 45 degrees (:func:`_profile_points`; :func:`_menton`, the
+same by the surface normals, when the profile has no chin).  The reference head's own 2.1
+lies further back, under the jaw; the landmark convention is what users (and ICT-FaceKit)
+mean and what they can see.
 
-Accuracy today (not yet the issue's goals of median 1.5 / p95 4 / max 8 % ES0), on the
-39 ICT-FaceKit points its landmarks define, 12 random identities full and decimated to
-30 %: median 5.2, p95 20.7, max 36.5 % ES0.  Worst: the brows' outer ends 4.5/4.6 and
-the chin corners 2.11/2.12 (the reference head has no brow geometry, and its
-conventions for those differ from the landmarks'), the subnasale 9.15 (template
-convention), and a head whose upper lip stands as far forward as its nose tip (its nose
-tip is then taken on the lip, and the whole face slides a third of an eye separation).
+Accuracy today (the issue's goals are median 1.5 / p95 4 / max 8 % ES0), on the 39
+ICT-FaceKit points its 68 landmarks define, on a fresh draw of 20 random identities
+(seeds 5001-5020 of the identity modes), each full and decimated to 25-35 %, randomly
+turned, tilted and scaled: median 2.0, p95 5.9, max 12.4 % ES0 (before this route: 5.0,
+19.3, 72.6, and two decimated heads refused).  By group (median / p95): mouth 1.9 / 4.4,
+eyes 1.8 / 5.1, nose 1.7 / 4.5, chin 2.8 / 7.4, brows 3.6 / 8.7.  Worst: the outer brow
+ends 4.5/4.6 (median 5, up to 12: brows are hair, not shape; their proportions to the
+eyes vary by 2-3.5 % ES between people, and on the temple's slope every error in x or y
+is one in depth too), the menton 2.1 (the 45-degree rule against a jaw-contour landmark,
+up to 11) and the decimated eyes' inner corners (the groove beyond the opening is coarse,
+up to 9).  About 1.5 s for a 27,000-vertex ICT head.
 
 Example
 -------
@@ -174,6 +198,8 @@ class _Template:
     face: np.ndarray       # skin vertex indices of the face (brows to chin, ear to ear)
     openings: dict         # name -> (centre, {landmark: skin vertex}) of the mouth and eyes
     es: float              # metres
+    profile: dict          # the mid-line points of its profile (:func:`_profile_points`)
+    eyes: dict             # its lid-margin points (:func:`_eye_points`)
 
 
 @lru_cache(maxsize=1)
@@ -210,7 +236,12 @@ def _template() -> _Template:
         got = _opening_landmarks(V, edge, c, half)
         if got is not None:
             openings[name] = (c, {k: int(v) for k, v in got.items()})
-    return _Template(V, T, pts, skin_index, parts, sample, face, openings, es)
+    prof = _profile_points(_profile(V, T, 0.6, -2.5), 0.0)
+    eyes = {}
+    for name, keys in _EYE_KEYS.items():
+        got = _eye_opening(V, T, 0.5 * (pts[keys[0]] + pts[keys[1]]), name == "left eye")
+        eyes.update({k: got[r] for k, r in zip(keys, ("out", "in", "top", "bottom")) if r in got})
+    return _Template(V, T, pts, skin_index, parts, sample, face, openings, es, prof, eyes)
 
 
 # the template's opening widths (eye separations): an eye's, the mouth's (by box size)
@@ -285,6 +316,628 @@ def _menton(V: np.ndarray, T: np.ndarray, pts: dict) -> np.ndarray:
     return V[good[np.argmin(V[good, 1])]]
 
 
+# -- the mid-plane profile ---------------------------------------------------------------------
+#: Step (eye separations) of the mid-plane profile's height grid: 0.01 ES (about 0.6 mm),
+#: finer than any ICT or reference-head edge that crosses the mid plane at the lips.
+PROFILE_STEP = 0.01
+#: How far (eye separations) the mid-plane profile must fall below a peak, before rising
+#: as high again, for the peak to be the nose tip: 0.1.  ICT noses fall 0.14-0.35 to the
+#: subnasale (the least where the upper lip stands almost as far forward as the tip); a
+#: glabella falls 0.02-0.08 to the nasion, a dorsal hump less.  The nose is the first
+#: such peak below the eye line, so an upper lip that falls as far to the stomion, below
+#: it, is never taken for it.
+NOSE_FALL = 0.1
+
+
+def _plane_cut(V: np.ndarray, T: np.ndarray, x0: float = 0.0) -> tuple:
+    """(a, b): the segments (k, 3) x 2 where the triangles cross the plane x = ``x0``.  A
+    vertex counts as on the plane's negative side when x < x0, else on its positive side
+    (half-open), so a triangle is cut by two of its edges or none, and a symmetric mesh's
+    mid-line vertices (x = x0 exactly) are cut points too."""
+    side = V[:, 0] < x0
+    s = side[T]
+    cut = s.any(1) & ~s.all(1)
+    Tc = T[cut]
+    sc = s[cut]
+    # the odd vertex out, then the two edges from it
+    odd = np.where(sc.sum(1) == 1, np.argmax(sc, 1), np.argmin(sc, 1))
+    r = np.arange(len(Tc))
+    o, p, q = Tc[r, odd], Tc[r, (odd + 1) % 3], Tc[r, (odd + 2) % 3]
+
+    def cross(i, j):
+        ai, aj = V[i, 0] - x0, V[j, 0] - x0
+        w = ai / (ai - aj)
+        return V[i] + w[:, None] * (V[j] - V[i])
+
+    return cross(o, p), cross(o, q)
+
+
+@dataclass(frozen=True)
+class _Profile:
+    """The front of the mid-plane profile: ``z[i]``, the most forward point of the cut at
+    height ``y[i]`` (template frame, eye separations), smoothed; ``raw`` unsmoothed (NaN
+    where nothing was cut)."""
+    y: np.ndarray
+    z: np.ndarray
+    raw: np.ndarray
+
+    def at(self, i: int) -> np.ndarray:
+        return np.array([0.0, self.y[i], self.z[i]])
+
+
+def _profile(Vt: np.ndarray, T: np.ndarray, top: float, bottom: float) -> _Profile:
+    """The front envelope of the skin's mid-plane cut between heights ``bottom`` and
+    ``top`` (template frame), on a :data:`PROFILE_STEP` grid, gaps filled linearly and
+    smoothed by a Gaussian of 1.5 steps (a decimated mesh's facets, not its shape)."""
+    A, B = _plane_cut(Vt, T)
+    y = np.arange(bottom, top + PROFILE_STEP / 2, PROFILE_STEP)
+    raw = np.full(len(y), -np.inf)
+    if len(A):
+        # each segment rasterised onto the grid (the heights it spans), the most forward kept
+        lo, hi = np.minimum(A[:, 1], B[:, 1]), np.maximum(A[:, 1], B[:, 1])
+        i0 = np.ceil((lo - bottom) / PROFILE_STEP).astype(int)
+        i1 = np.floor((hi - bottom) / PROFILE_STEP).astype(int)
+        i0, i1 = np.maximum(i0, 0), np.minimum(i1, len(y) - 1)
+        n = np.maximum(i1 - i0 + 1, 0)
+        seg = np.repeat(np.arange(len(A)), n)
+        idx = np.arange(n.sum()) - np.repeat(np.cumsum(n) - n, n) + i0[seg]
+        dy = B[seg, 1] - A[seg, 1]
+        w = np.where(np.abs(dy) > 1e-12, (y[idx] - A[seg, 1]) / np.where(dy == 0, 1, dy), 0.5)
+        zz = A[seg, 2] + np.clip(w, 0, 1) * (B[seg, 2] - A[seg, 2])
+        np.maximum.at(raw, idx, zz)
+    have = np.isfinite(raw)
+    if have.sum() < 2:
+        return _Profile(y, np.zeros_like(y), np.where(have, raw, np.nan))
+    z = np.interp(y, y[have], raw[have])
+    k = np.arange(-4, 5)
+    g = np.exp(-0.5 * (k / 1.5) ** 2)
+    zs = np.convolve(np.pad(z, 4, mode="edge"), g / g.sum(), mode="valid")
+    return _Profile(y, zs, np.where(have, raw, np.nan))
+
+
+def _farthest(yy: np.ndarray, zz: np.ndarray, i: int, j: int) -> int:
+    """The index in [i, j] of the profile point furthest in front of (+z side of) the chord
+    from point i to point j: where the profile's tangent is parallel to the chord."""
+    a, b = np.array([yy[i], zz[i]]), np.array([yy[j], zz[j]])
+    d = b - a
+    n = np.array([-d[1], d[0]])
+    if n[1] < 0:
+        n = -n
+    seg = np.c_[yy[i:j + 1], zz[i:j + 1]]
+    return i + int(np.argmax((seg - a) @ n))
+
+
+def _profile_points(prof: _Profile, eye_y: float, lips_ok=None) -> dict:
+    """Mid-line points read off the profile (template frame), walking down from the eye
+    line ``eye_y``: {"9.3", "9.15", "8.1", "2.2", "2.3", "8.2"} where found.
+
+    - the nose: the first peak below the eye line that the profile then falls from by
+      0.15 ES or more before rising as high again (an upper lip standing as far forward as
+      the nose does not qualify: its fall to the stomion is about 0.1 ES; nor the
+      glabella, whose fall to the nasion is smaller still);
+    - 8.1 (labrale superius): the upper lip's most forward point, the first peak below
+      the nose's fall; 8.2 (labrale inferius): the lower lip's, the next peak, then moved
+      down to where the lower lip's bulge turns towards the labiomental fold (the point
+      furthest in front of the chord from the stomion to the fold: Multi-PIE's landmark
+      57 lies on the vermilion's lower edge, not on the bulge's front);
+    - 2.2 and 2.3 (the inner lips' middles): where the lips meet, the deepest point
+      between 8.1 and 8.2 when the lips touch; when they part (the profile steps back
+      more than 0.12 ES into the mouth between them), the upper lip's lowest and the lower
+      lip's highest front points, either side of the gap;
+    - 9.15 (subnasale): the point furthest behind the chord from the nose tip to 8.1
+      (the corner where the columella meets the lip);
+    - 9.3 (pronasale): the point furthest in front of the chord from the sellion (the
+      deepest point between the eye line and the nose) to the subnasale: the tip as
+      seen square to the nose's own axis, so it does not slide with the head's pitch.
+    """
+    from scipy.signal import find_peaks
+    y, z = prof.y, prof.z
+    order = np.argsort(-y)          # top down
+    yy, zz = y[order], z[order]
+    start = int(np.searchsorted(-yy, -eye_y))
+    out = {}
+    peaks, _ = find_peaks(zz, prominence=0.005)
+    peaks = peaks[peaks >= start]
+    # the upper lip's front can be all but flat (a philtrum hardly hollow): any bump
+    lip_peaks, _ = find_peaks(zz, prominence=0.0005)
+    tip = None
+    for p in peaks:
+        after = zz[p:]
+        higher = np.flatnonzero(after > zz[p])
+        seg = after[:higher[0]] if len(higher) else after
+        if zz[p] - seg.min() >= NOSE_FALL:
+            tip = p
+            break
+    if tip is None:
+        return out
+    out["9.3"] = np.array([0.0, yy[tip], zz[tip]])
+    fallen = np.flatnonzero(zz[tip:] < zz[tip] - NOSE_FALL)
+    if not len(fallen):
+        return out
+    below = lip_peaks[lip_peaks > tip + fallen[0]]
+    if not len(below):
+        return out
+    ul = below[0]
+    out["8.1"] = np.array([0.0, yy[ul], zz[ul]])
+    # curvature (second difference over 2 steps, + concave: a crease; - convex: a rim)
+    d2 = np.zeros_like(zz)
+    d2[2:-2] = zz[:-4] - 2 * zz[2:-2] + zz[4:]
+    win = int(0.35 / PROFILE_STEP)
+    rz = prof.raw[order]
+    # the lips' meeting: a gap where the raw front steps back into the mouth, else the
+    # first crease at least a fifth as sharp as the sharpest within 0.35 ES below 8.1
+    ref = zz[ul]
+    span = slice(ul, min(ul + win, len(zz) - 1) + 1)
+    deep = ~(rz[span] > ref - 0.12)
+    if deep.any():
+        g0 = int(np.argmax(deep))                       # the first run of deep bins
+        run = np.flatnonzero(~deep[g0:])
+        g1 = g0 + (run[0] if len(run) else len(deep) - g0) - 1
+        up, lo = ul + g0 - 1, ul + g1 + 1
+    if deep.any():
+        # the lips part where the front steps back (a jump of 0.04 ES in one step, or no
+        # cut at all); a smooth fall (the labiomental fold of a retruded lower lip), or a
+        # "gap" taller than 0.12 ES, is no parting
+        r = rz[up:lo + 1]
+        jump = ~np.isfinite(r).all() or np.nanmax(np.abs(np.diff(r))) > 0.04
+        if not jump or lo - up > 0.12 / PROFILE_STEP:
+            deep[:] = False
+    if not deep.any():
+        c = d2[span]
+        strong = np.flatnonzero((c >= 0.2 * c.max()) & (c > 0))
+        peaks_c, _ = find_peaks(c)
+        firsts = [p for p in peaks_c if p in set(strong.tolist())]
+        up = lo = ul + (firsts[0] if firsts else int(np.argmax(c)))
+    if lips_ok is not None:
+        # an upper lip that does not bulge gives no bump: its first bump was then the
+        # lower lip's, and the lips' contact lies above it: a crease between 0.3 ES below
+        # the tip (the tip to the stomion is 0.4 ES or more: nose below the tip, then
+        # philtrum; a philtrum's crease lies higher) and that bump from which a groove
+        # runs the mouth's width
+        f = tip + int(fallen[0])
+        a0 = tip + int(0.3 / PROFILE_STEP)
+        if ul > a0 + 2:
+            pk, _ = find_peaks(d2[a0:ul])
+            for p in pk:
+                if d2[a0 + p] > 0 and lips_ok(np.array([0.0, yy[a0 + p], zz[a0 + p]])):
+                    up = lo = a0 + p
+                    ul = _farthest(yy, zz, f, up)
+                    out["8.1"] = np.array([0.0, yy[ul], zz[ul]])
+                    break
+    def front(i):
+        # the raw front at bin i, or the nearest bin's within two (the smoothed one dips
+        # into a parting's gap), unless that is the inside of the mouth or head seen
+        # through the gap
+        for o in (0, -1, 1, -2, 2):
+            if 0 <= i + o < len(rz) and np.isfinite(rz[i + o]) and rz[i + o] > zz[i] - 0.15:
+                return rz[i + o]
+        return zz[i]
+
+    out["2.2"] = np.array([0.0, yy[up], front(up)])
+    out["2.3"] = np.array([0.0, yy[lo], front(lo)])
+    # 8.2: the lower lip's rim, the most convex point between the lower lip's front and
+    # the labiomental fold (the deepest point within 0.35 ES below it)
+    # (from the lower lip's front, the most forward point within 0.2 ES below the lips'
+    # meeting: the smoothed profile just below a parting still dips into the gap)
+    ll = lo + int(np.argmax(zz[lo:min(lo + int(0.2 / PROFILE_STEP), len(zz) - 1) + 1]))
+    end = min(ll + int(0.35 / PROFILE_STEP), len(zz) - 1)
+    fold = ll + int(np.argmin(zz[ll:end + 1]))
+    if fold > ll + 2:
+        i8 = ll + int(np.argmin(d2[ll:fold]))
+        out["8.2"] = np.array([0.0, yy[i8], zz[i8]])
+    # 2.1 (menton; the module docstring's convention): from under the chin (where the
+    # profile has fallen 0.4 ES behind the chin's front, 0.25 ES or more below the lips'
+    # meeting) back up the chin's underside to where it turns 45 degrees from facing down
+    # to facing forward (the lower lip's underside can be as steep, so not walking down)
+    a0 = lo + int(0.25 / PROFILE_STEP)
+    if a0 < len(zz) - 2:
+        front = np.maximum.accumulate(zz[a0:])
+        under = np.flatnonzero(zz[a0:] < front - 0.4)
+        if len(under):
+            m = a0 + int(under[0])
+            while m - 1 > a0 and (zz[m - 2] - zz[m]) / (2 * PROFILE_STEP) >= 1.0:
+                m -= 1
+            out["2.1"] = np.array([0.0, yy[m], zz[m]])
+    # subnasale: furthest behind the chord tip -> upper lip
+    a, b = np.array([yy[tip], zz[tip]]), np.array([yy[ul], zz[ul]])
+    d = b - a
+    n = np.array([-d[1], d[0]])
+    if n[1] > 0:
+        n = -n
+    sn = tip + int(np.argmax((np.c_[yy[tip:ul + 1], zz[tip:ul + 1]] - a) @ n))
+    out["9.15"] = np.array([0.0, yy[sn], zz[sn]])
+    # the tip square to the nose's axis (sellion -> subnasale)
+    top = max(start - int(0.3 / PROFILE_STEP), 0)
+    se = top + int(np.argmin(zz[top:tip + 1]))
+    t2 = _farthest(yy, zz, se, sn)
+    out["9.3"] = np.array([0.0, yy[t2], zz[t2]])
+    return out
+
+
+# -- the eye openings, seen from the front ----------------------------------------------------
+#: Cell size (eye separations) of the front-view depth maps of the eyes: 0.01 ES.
+DEPTH_CELL = 0.01
+
+
+def _depth_map(Vt: np.ndarray, T: np.ndarray, lo: np.ndarray, hi: np.ndarray,
+               cell: float = DEPTH_CELL) -> np.ndarray:
+    """The skin seen from the front (+z) in the box ``lo``..``hi`` (template frame):
+    (nx, ny) grid of the most forward z of the triangles over each cell centre, NaN where
+    no triangle is.  Each triangle in the box is sampled on a barycentric lattice fine
+    enough for the cell size (its longest edge over half a cell), so a decimated mesh's
+    large triangles leave no gaps."""
+    nx = int(np.ceil((hi[0] - lo[0]) / cell))
+    ny = int(np.ceil((hi[1] - lo[1]) / cell))
+    out = np.full((nx, ny), -np.inf)
+    P = Vt[T]                                             # (m, 3, 3)
+    inb = ((P[:, :, 0].max(1) >= lo[0]) & (P[:, :, 0].min(1) <= hi[0])
+           & (P[:, :, 1].max(1) >= lo[1]) & (P[:, :, 1].min(1) <= hi[1])
+           & (P[:, :, 2].max(1) >= lo[2]))
+    P = P[inb]
+    if not len(P):
+        return np.full((nx, ny), np.nan)
+    edge = np.linalg.norm(P - P[:, [1, 2, 0]], axis=2).max(1)
+    nsub = np.clip(np.ceil(edge / (0.5 * cell)).astype(int), 1, 64)
+    for n in np.unique(nsub):
+        tri = P[nsub == n]
+        i, j = np.meshgrid(np.arange(n + 1), np.arange(n + 1), indexing="ij")
+        keep = i + j <= n
+        a, b = i[keep] / n, j[keep] / n
+        w = np.c_[1 - a - b, a, b]                        # (k, 3)
+        Q = np.einsum("kv,mvc->mkc", w, tri).reshape(-1, 3)
+        ix = np.floor((Q[:, 0] - lo[0]) / cell).astype(int)
+        iy = np.floor((Q[:, 1] - lo[1]) / cell).astype(int)
+        ok = (ix >= 0) & (ix < nx) & (iy >= 0) & (iy < ny) & (Q[:, 2] >= lo[2])
+        np.maximum.at(out, (ix[ok], iy[ok]), Q[ok, 2])
+    out[~np.isfinite(out)] = np.nan
+    return out
+
+
+# -- points no geometry marks: placed by proportion from the crisp ones ---------------------------
+#: Points without a geometric mark on a mesh (the brows are hair, drawn on a texture; the
+#: chin's corners and the outer lips' intermediate points are points *along* a contour),
+#: placed by the proportions of the Multi-PIE / iBUG 68-landmark convention (the one
+#: ICT-FaceKit's landmarks and users' face trackers follow) relative to the crisp points
+#: found, then dropped along z onto the skin's front.  Each entry:
+#: ``id -> (frame, a, b)``; the frames (:func:`_convention_points`):
+#:
+#: - ``eye``: origin the eye's centre (the mean of its corners and lid middles), ``a``
+#:   along the line from the other eye's centre (outward), ``b`` square to it (up), in
+#:   units of half the outer canthi's distance (3.7-3.12: a long base, so a corner's
+#:   error hardly turns or scales it);
+#: - ``chin``: ``x = x(2.1) + a (x(corner) - x(2.1))``, ``y`` likewise with ``b``, the
+#:   corner the mouth's outer corner (8.3/8.4) of that side;
+#: - ``lip``: ``x = x(mid) + a (x(corner) - x(mid))``, ``y = y(corner) + b (y(mid) -
+#:   y(corner))``, mid 8.1 (upper) or 8.2 (lower), corner 8.3/8.4;
+#: - ``nose``: ``x = a`` half the outer canthi's distance (3.7-3.12) to that side,
+#:   ``y = y(9.15) + b`` that distance.
+#:
+#: The proportions are the means over 20 random ICT-FaceKit identities (seeds 101-120 of
+#: ``benchmarks/ict.py``'s identity draw, none of them used to judge the detector); in
+#: brackets the standard deviation of ``a`` and ``b`` over them.  The brows [0.02-0.04
+#: half canthal widths: 1-2.5 % ES] vary most: where a person's eyebrows are is not in
+#: the mesh.
+CONVENTION = {
+    "4.1": ("eye", -0.464, 0.562),     # inner brow end       [0.017, 0.030]
+    "4.3": ("eye", 0.126, 0.640),      # brow's top           [0.025, 0.031]
+    "4.5": ("eye", 0.577, 0.393),      # outer brow end       [0.029, 0.036]
+    "2.11": ("chin", 0.596, 0.075),    # chin corner          [0.033, 0.011]
+    "8.5": ("lip", 0.618, 0.776),      # upper lip, half way  [0.017, 0.049]
+    "8.10": ("lip", 0.288, 1.069),     # Cupid's bow peak     [0.012, 0.027]
+    "8.7": ("lip", 0.589, 0.766),      # lower lip, half way  [0.020, 0.061]
+    "9.5": ("nose", 0.276, 0.009),     # nostril base's end   [0.016, 0.005]
+}
+#: The mirror partners (the face's right side) of :data:`CONVENTION`.
+_CONVENTION_RIGHT = {"4.2": "4.1", "4.4": "4.3", "4.6": "4.5", "2.12": "2.11", "8.6": "8.5",
+                     "8.9": "8.10", "8.8": "8.7", "9.4": "9.5"}
+
+
+def _front_at(Vt: np.ndarray, T: np.ndarray, xy: np.ndarray) -> np.ndarray:
+    """(k,) the most forward z of the skin over each point ``xy`` (k, 2) (template frame),
+    NaN where no triangle is over it."""
+    P = Vt[T]
+    out = np.full(len(xy), np.nan)
+    lo, hi = P[:, :, :2].min(1), P[:, :, :2].max(1)
+    for n, q in enumerate(xy):
+        m = np.flatnonzero(np.all((lo <= q) & (hi >= q), axis=1))
+        if not len(m):
+            continue
+        a, b, c = P[m, 0], P[m, 1], P[m, 2]
+        v0, v1, v2 = b[:, :2] - a[:, :2], c[:, :2] - a[:, :2], q - a[:, :2]
+        den = v0[:, 0] * v1[:, 1] - v1[:, 0] * v0[:, 1]
+        ok = np.abs(den) > 1e-15
+        den = np.where(ok, den, 1.0)
+        u = (v2[:, 0] * v1[:, 1] - v1[:, 0] * v2[:, 1]) / den
+        v = (v0[:, 0] * v2[:, 1] - v2[:, 0] * v0[:, 1]) / den
+        inside = ok & (u >= -1e-9) & (v >= -1e-9) & (u + v <= 1 + 1e-9)
+        if inside.any():
+            z = (a[:, 2] + u * (b[:, 2] - a[:, 2]) + v * (c[:, 2] - a[:, 2]))[inside]
+            out[n] = z.max()
+    return out
+
+
+def _convention_points(Vt: np.ndarray, T: np.ndarray, pos: dict, crisp: set) -> dict:
+    """The :data:`CONVENTION` points (and their mirror partners) from the crisp points in
+    ``pos`` (template frame; only those in ``crisp`` are used), on the skin's front."""
+    want = {**{k: (k, 1.0) for k in CONVENTION}, **{k: (m, -1.0) for k, m in _CONVENTION_RIGHT.items()}}
+    corner = {1.0: "8.3", -1.0: "8.4"}
+    xy = {}
+    for k, (rule, side) in want.items():
+        frame, a, b = CONVENTION[rule]
+        if frame == "eye":
+            if not all(e in crisp for e in _EYE_KEYS["left eye"] + _EYE_KEYS["right eye"]):
+                continue
+            cl = np.mean([pos[e] for e in _EYE_KEYS["left eye"]], axis=0)[:2]
+            cr = np.mean([pos[e] for e in _EYE_KEYS["right eye"]], axis=0)[:2]
+            u = (cl - cr) / np.linalg.norm(cl - cr)
+            n = np.array([-u[1], u[0]])                  # up
+            unit = 0.5 * np.linalg.norm((pos["3.7"] - pos["3.12"])[:2])
+            c = cl if side > 0 else cr
+            xy[k] = c + unit * (side * a * u + b * n)
+        elif frame == "chin":
+            c = corner[side]
+            if "2.1" not in crisp or c not in crisp:
+                continue
+            xy[k] = pos["2.1"][:2] + np.array([a, b]) * (pos[c][:2] - pos["2.1"][:2])
+        elif frame == "lip":
+            mid = "8.1" if rule in ("8.5", "8.10") else "8.2"
+            c = corner[side]
+            if mid not in crisp or c not in crisp:
+                continue
+            xy[k] = np.array([pos[mid][0] + a * (pos[c][0] - pos[mid][0]),
+                              pos[c][1] + b * (pos[mid][1] - pos[c][1])])
+        elif frame == "nose":
+            if not {"3.7", "3.12", "9.15"} <= crisp:
+                continue
+            half = 0.5 * abs(pos["3.7"][0] - pos["3.12"][0])
+            xy[k] = np.array([side * a * half, pos["9.15"][1] + b * 2 * half])
+    if not xy:
+        return {}
+    keys = list(xy)
+    z = _front_at(Vt, T, np.array([xy[k] for k in keys]))
+    # on the face's front, not far behind where the registration put the point (one
+    # dropped into an opening would find the inside of the head, an eye separation or
+    # more behind; an outer brow end lies up to half of one behind the template's)
+    return {k: np.array([*xy[k], zk]) for k, zk in zip(keys, z)
+            if np.isfinite(zk) and (k not in pos or zk > pos[k][2] - 0.6)}
+
+
+#: Where Multi-PIE's inner lip corners (landmarks 60/64, MPEG-4 2.4/2.5) lie on a closed
+#: mouth, as a fraction of the way from the mid line to the commissure along the lips'
+#: contact groove: 0.875 (the inner corners sit an eighth of the mouth's half width
+#: inside the commissures: 0.86-0.89 on ICT-FaceKit identities, measured on the mean
+#: face and four random identities; a closed mouth's contact line has no geometric mark
+#: there, and a slit between the lips seen from the front ends anywhere from a third to
+#: two thirds of the way out, so it marks nothing either).
+INNER_CORNER = 0.875
+
+
+def _groove(D: np.ndarray, i: int, j: int, step: int, reach: int = 3,
+            depth: float = 0.01, slack: int = 3) -> list:
+    """The cells (i, j) of the groove of the depth map ``D`` (front-view z, -inf where
+    empty) followed from (i, j) along x (``step`` = +-1): at each column the deepest cell
+    within two cells of the last one's height (an empty cell is deepest: an opening),
+    while it lies ``depth`` (0.01 ES, 0.6 mm) or more behind the mean of the cells
+    ``reach`` rows above and below it (a groove, not the smooth skin beyond its end).
+    Up to ``slack`` weaker columns in a row are crossed (a decimated mesh's facets make a
+    shallow groove flicker); the groove ends at its last strong cell."""
+    out, weak = [], []
+    ny = D.shape[1]
+    for _ in range(D.shape[0]):
+        i += step
+        if not 0 <= i < D.shape[0]:
+            break
+        js = np.arange(max(j - 2, reach), min(j + 3, ny - reach))
+        if not len(js):
+            break
+        jb = int(js[np.argmin(D[i, js])])
+        z, up, dn = D[i, jb], D[i, jb + reach], D[i, jb - reach]
+        if np.isfinite(z) and (not (np.isfinite(up) and np.isfinite(dn))
+                               or 0.5 * (up + dn) - z < depth):
+            weak.append((i, jb))
+            if len(weak) > slack:
+                break
+        else:
+            out.extend(weak)
+            weak = []
+            out.append((i, jb))
+        j = jb
+    return out
+
+
+def _mouth_points(Vt: np.ndarray, T: np.ndarray, stomion: np.ndarray) -> dict:
+    """The mouth's corners from the lips' contact groove seen from the front (template
+    frame): the groove (:func:`_groove`) of the skin's depth map followed from the
+    stomion (the profile's lips' meeting) to each side; its ends are the commissures
+    (8.3, 8.4: the outer corners); the inner corners (2.4, 2.5) are the groove's points
+    :data:`INNER_CORNER` of the way out; 2.6-2.9 (the inner lips'
+    midpoints) on the groove half way to the inner corners (its edges above and below
+    when it is open there).  {} without a groove a mouth's width (0.45 to 1.4 ES) whose
+    ends lie symmetrically about the mid line (within 15 % of its width)."""
+    lo = np.array([-0.75, stomion[1] - 0.2, stomion[2] - 0.6])
+    hi = np.array([0.75, stomion[1] + 0.2])
+    D = _depth_map(Vt, T, lo, hi)
+    F = np.where(np.isnan(D), -np.inf, D)
+    i0 = int((0.0 - lo[0]) / DEPTH_CELL)
+    j0 = int((stomion[1] - lo[1]) / DEPTH_CELL)
+    sides = {}
+    for name, step in (("left", 1), ("right", -1)):
+        g = _groove(F, i0, j0, step)
+        if not g:
+            return {}
+        sides[name] = g
+    width = (sides["left"][-1][0] - sides["right"][-1][0]) * DEPTH_CELL
+    skew = (sides["left"][-1][0] + sides["right"][-1][0] - 2 * i0) * DEPTH_CELL
+    if not 0.45 <= width <= 1.4 or abs(skew) > 0.15 * width:
+        return {}
+    cx = lambda i: lo[0] + (i + 0.5) * DEPTH_CELL
+    cy = lambda j: lo[1] + (j + 0.5) * DEPTH_CELL
+
+    def at(i, j, dj=0):
+        # the surface point at cell (i, j): its depth, or the first filled cell in dj
+        while not np.isfinite(F[i, j]) and dj and 0 <= j + dj < F.shape[1]:
+            j += dj
+        return np.array([cx(i), cy(j), F[i, j]]) if np.isfinite(F[i, j]) else None
+
+    out = {}
+    for name, (outer, inner, up, dn) in (("left", ("8.3", "2.4", "2.6", "2.8")),
+                                         ("right", ("8.4", "2.5", "2.7", "2.9"))):
+        g = sides[name]
+        ie, je = g[-1]
+        p = at(ie, je)
+        if p is not None:
+            out[outer] = p
+        # (not the end of an opening seen from the front: lips modelled as two sheets
+        # leave a slit a third to two thirds of the way out, and ICT's inner corners stay
+        # 0.045-0.055 ES inside the commissures whether or not it is there)
+        k = int(np.argmin([abs(abs(cx(i)) - INNER_CORNER * abs(cx(ie))) for i, _ in g]))
+        ic, jc = g[k]
+        p = at(ic, jc, 1) if not np.isfinite(F[ic, jc]) else at(ic, jc)
+        if p is not None:
+            out[inner] = p
+        # half way along the groove (arc length, in 3D) to the inner corner
+        pts = [at(i, j, 1) for i, j in g[:k + 1]]
+        ok = [q is not None for q in pts]
+        Q = np.array([q for q in pts if q is not None])
+        if len(Q) < 2:
+            continue
+        arc = np.r_[0, np.cumsum(np.linalg.norm(np.diff(Q, axis=0), axis=1))]
+        h = int(np.flatnonzero(ok)[np.argmin(np.abs(arc - 0.5 * arc[-1]))])
+        ih, jh = g[h]
+        pu, pd = at(ih, jh, 1), at(ih, jh, -1)
+        if pu is not None and pd is not None:
+            out[up], out[dn] = pu, pd
+    return out
+
+
+#: Each eye's lid-margin points: outer corner, inner corner, upper and lower lid middles.
+_EYE_KEYS = {"left eye": ("3.7", "3.11", "3.1", "3.3"), "right eye": ("3.12", "3.8", "3.2", "3.4")}
+
+
+def _eye_points(Vt: np.ndarray, T: np.ndarray, tpl) -> dict:
+    """The lid-margin points of both eyes (:func:`_eye_opening`), each eye searched round
+    where the template's eye lies after the rigid fit; an eye without an opening of an
+    eye's size there gives none."""
+    out = {}
+    for name, keys in _EYE_KEYS.items():
+        c = 0.5 * (tpl.points[keys[0]] + tpl.points[keys[1]])
+        got = _eye_opening(Vt, T, c, name == "left eye")
+        out.update({k: got[r] for k, r in zip(keys, ("out", "in", "top", "bottom")) if r in got})
+    return out
+
+
+def _groove_end(D: np.ndarray, i: int, j: int, step: int, reach: int = 3,
+                depth: float = 0.01) -> Optional[tuple]:
+    """Following the groove of the depth map ``D`` (front-view z, -inf where empty) from
+    the opening's extreme cell (i, j) outward along x (``step`` = +-1): at each column the
+    deepest cell within two cells of the last one's height, kept while it lies ``depth``
+    (0.01 ES, 0.6 mm) or more behind the mean of the cells ``reach`` rows above and below
+    it (a groove, not the smooth skin beyond the corner), for 0.07 ES at most (a
+    caruncle's pocket reaches 0.04-0.06 ES; on a coarse mesh the side of the nose can
+    look like a groove going on); the last groove cell, or None."""
+    last = None
+    ny = D.shape[1]
+    for _ in range(int(0.07 / DEPTH_CELL)):
+        i += step
+        if not 0 <= i < D.shape[0]:
+            break
+        js = np.arange(max(j - 2, reach), min(j + 3, ny - reach))
+        if not len(js):
+            break
+        col = D[i, js]
+        if not np.isfinite(col).any():
+            continue                      # still in the opening
+        jb = int(js[np.argmax(np.where(np.isfinite(col), -col, -np.inf))])
+        z, up, dn = D[i, jb], D[i, jb + reach], D[i, jb - reach]
+        if not (np.isfinite(up) and np.isfinite(dn)) or 0.5 * (up + dn) - z < depth:
+            break
+        last, j = (i, jb), jb
+    return last
+
+
+def _eye_opening(Vt: np.ndarray, T: np.ndarray, centre: np.ndarray, left: bool) -> dict:
+    """The lid margins of the eye round ``centre`` (template frame) from the opening the
+    skin leaves as seen from the front: {"out", "in", "top", "bottom"} -> point on the
+    skin's front edge, or {} when no opening of an eye's size is there.
+
+    The opening is the connected empty part of the front-view depth map
+    (:func:`_depth_map`, skin only: an eyeball is another piece) nearest the centre, 0.15
+    to 0.6 ES wide and less tall than wide; its corners are its lateral extremes, its lid
+    middles the top and bottom of its column half way between them, each taken on the
+    skin just outside the opening (the most forward surface there: the lid margin's front
+    edge, not the hole's boundary, which can lie a fifth of an eye separation deeper)."""
+    from scipy import ndimage
+    half = np.array([0.4, 0.3])
+    lo = np.array([centre[0] - half[0], centre[1] - half[1], centre[2] - 0.45])
+    hi = np.array([centre[0] + half[0], centre[1] + half[1]])
+    D = _depth_map(Vt, T, lo, hi)
+    empty = np.isnan(D)
+    lab, n = ndimage.label(empty)
+    if not n:
+        return {}
+    ci = int((centre[0] - lo[0]) / DEPTH_CELL)
+    cj = int((centre[1] - lo[1]) / DEPTH_CELL)
+    best, best_d = None, np.inf
+    border = set(np.unique(np.r_[lab[0], lab[-1], lab[:, 0], lab[:, -1]]).tolist())
+    for k in range(1, n + 1):
+        if k in border:
+            continue
+        ii, jj = np.nonzero(lab == k)
+        w = (ii.max() - ii.min() + 1) * DEPTH_CELL
+        h = (jj.max() - jj.min() + 1) * DEPTH_CELL
+        if not (0.15 <= w <= 0.6 and h < w):
+            continue
+        dd = np.hypot(ii.mean() - ci, jj.mean() - cj)
+        if dd < best_d:
+            best, best_d = (ii, jj), dd
+    if best is None:
+        return {}
+    ii, jj = best
+    x = lo[0] + (ii + 0.5) * DEPTH_CELL
+    y = lo[1] + (jj + 0.5) * DEPTH_CELL
+    filled = np.where(np.isnan(D), -np.inf, D)
+
+    def front(i, j, di, dj):
+        # the first filled cell outward from (i, j), its centre at the front surface
+        for _ in range(6):
+            i, j = i + di, j + dj
+            if not (0 <= i < D.shape[0] and 0 <= j < D.shape[1]):
+                break
+            if np.isfinite(filled[i, j]):
+                return np.array([lo[0] + (i + 0.5) * DEPTH_CELL, lo[1] + (j + 0.5) * DEPTH_CELL,
+                                 filled[i, j]])
+        return None
+
+    out = {}
+    imax, imin = ii.max(), ii.min()
+    jr = int(np.round(jj[ii == imax].mean()))
+    jl = int(np.round(jj[ii == imin].mean()))
+    pr, pl = front(imax, jr, 1, 0), front(imin, jl, -1, 0)
+    # the inner corner: the lids meet medially beyond the opening, over a groove (a
+    # caruncle's pocket) that can reach a twentieth of an eye separation further; the
+    # corner is where that groove ends
+    med = -1 if left else 1
+    ic, jc = (imin, jl) if left else (imax, jr)
+    groove = _groove_end(filled, ic, jc, med)
+    if groove is not None:
+        g = np.array([lo[0] + (groove[0] + 0.5) * DEPTH_CELL,
+                      lo[1] + (groove[1] + 0.5) * DEPTH_CELL, filled[groove]])
+        if left:
+            pl = g
+        else:
+            pr = g
+    icol = int(np.round(0.5 * (imax + imin)))
+    col = jj[ii == icol]
+    if not len(col) or pr is None or pl is None:
+        return {}
+    pt, pb = front(icol, col.max(), 0, 1), front(icol, col.min(), 0, -1)
+    if pt is None or pb is None:
+        return {}
+    out["out"], out["in"] = (pr, pl) if left else (pl, pr)
+    out["top"], out["bottom"] = pt, pb
+    return out
+
+
 # -- pieces --------------------------------------------------------------------------------
 @dataclass
 class _Pieces:
@@ -317,9 +970,10 @@ def _pieces(face: FaceModel) -> _Pieces:
                                 "feature points on")
     V, T = np.vstack(verts), np.vstack(tris)
     comp = np.concatenate(comp)
-    # the skin: the component with the most triangles (the head is the biggest piece)
-    tri_count = np.bincount(comp[T[:, 0]], minlength=ncomp)
-    skin = int(np.argmax(tri_count))
+    # the skin: the component with the largest area (the head is the biggest piece; by
+    # triangle count a decimated skin can lose to a finely meshed mouth interior)
+    area = 0.5 * np.linalg.norm(np.cross(V[T[:, 1]] - V[T[:, 0]], V[T[:, 2]] - V[T[:, 0]]), axis=1)
+    skin = int(np.argmax(np.bincount(comp[T[:, 0]], weights=area, minlength=ncomp)))
     return _Pieces(V, T, np.concatenate(mesh_of), np.concatenate(local), comp, names, skin)
 
 
@@ -370,7 +1024,7 @@ def _icp(tpl: np.ndarray, tpl_tree: cKDTree, tgt: np.ndarray, tgt_tree: cKDTree,
     return s, R, t, float(score)
 
 
-def _head_frame(skin_v: np.ndarray, tpl: _Template) -> tuple:
+def _head_frame(skin_v: np.ndarray, tpl: _Template, ST: Optional[np.ndarray] = None) -> tuple:
     """(s, R, t, score) of the best similarity from the target's skin (model coordinates)
     to the template frame, over the 24 axis-aligned starts."""
     rng = np.random.default_rng(1)
@@ -404,23 +1058,79 @@ def _head_frame(skin_v: np.ndarray, tpl: _Template) -> tuple:
     # then the face alone: the template's face (a subset of any head) onto the target,
     # one way, so the skull's and neck's proportions no longer pull the features off
     F = tpl.V[tpl.face]
-    nose_tpl = tpl.points["9.3"]
+    nose_tpl = tpl.profile.get("9.3", tpl.points["9.3"])
     for rounds in range(2):
         for _ in range(15):
             back = (F - t) @ R / s
             d, i = b_all.query(back)
             k = d <= np.quantile(d, 0.9)
             s, R, t = _similarity(skin_v[i[k]], F[k])
-        # the nose tip, the most forward point near the mid line, sets the translation
-        # (the face fit can settle a third of an eye separation up or down a long face)
+        # the nose tip sets the translation (the face fit can settle a third of an eye
+        # separation up or down a long face): the first peak of the mid-plane profile
+        # below the eye line that the profile then falls from like a nose
+        # (:func:`_profile_points`); without triangles, the most forward point near the
+        # mid line
         q = s * skin_v @ R.T + t
-        box = (np.abs(q[:, 0]) < 0.3) & (np.abs(q[:, 1] - nose_tpl[1]) < 0.8) \
-            & (q[:, 2] > nose_tpl[2] - 1.0)
-        if not box.any():
-            break
-        tip = q[box][np.argmax(q[box, 2])]
-        t = t + (nose_tpl - tip) * [1, 1, 1]
+        tip = None
+        if ST is not None:
+            prof = _profile(q, ST, 0.6, -2.5)
+            tip = _profile_points(prof, 0.0).get("9.3")
+        if tip is None:
+            box = (np.abs(q[:, 0]) < 0.3) & (np.abs(q[:, 1] - nose_tpl[1]) < 0.8) \
+                & (q[:, 2] > nose_tpl[2] - 1.0)
+            if not box.any():
+                break
+            tip = q[box][np.argmax(q[box, 2])]
+        t = t + (nose_tpl - tip) * [0, 1, 1]
     return s, R, t, score
+
+
+def _mid_plane(Vt: np.ndarray, T: np.ndarray, iterations: int = 6) -> tuple:
+    """(A, b): the rotation and offset that put the skin's plane of bilateral symmetry at
+    x = 0 (template frame): ``Vt @ A.T + b`` is symmetric about x = 0.
+
+    The front of the face (brows to chin, within an eye separation of the mid line;
+    1,500 vertices at most) is mirrored in the current plane, each mirrored vertex is
+    matched to the closest point of the surface, and the plane x = a + b y + c z is the
+    one whose mirror puts the mirrored vertices on their matches' tangent planes (linear
+    least squares, point to plane, the worst fifth trimmed); six rounds.  The rigid fit of the symmetric template leaves the plane
+    a few percent of an eye separation off (the rest of the head pulls it); the
+    profile's points are read on this plane."""
+    A, b = np.eye(3), np.zeros(3)
+    sel = np.flatnonzero((Vt[:, 2] > 0.5) & (Vt[:, 1] > -2.0) & (Vt[:, 1] < 0.8)
+                         & (np.abs(Vt[:, 0]) < 1.0))
+    if len(sel) < 30:
+        return A, b
+    sel = sel[::max(1, len(sel) // 1500)]
+    for _ in range(iterations):
+        W = Vt @ A.T + b
+        P = W[sel]
+        Pm = P * [-1, 1, 1]
+        tri, bary, _ = closest_points(Pm, W, T)
+        M = np.einsum("nk,nkc->nc", bary, W[T[tri]])
+        Tn = np.cross(W[T[tri, 1]] - W[T[tri, 0]], W[T[tri, 2]] - W[T[tri, 0]])
+        Tn /= np.maximum(np.linalg.norm(Tn, axis=1), 1e-300)[:, None]
+        # point to plane: the mirror of p in x = a + b y + c z (small b, c) is, to first
+        # order, its mirror in x = 0 moved by 2 (a + b y + c z) along x and 2 x (0, b, c);
+        # that move should cancel its distance to the match's tangent plane
+        X = 2 * np.c_[Tn[:, 0], Tn[:, 0] * P[:, 1] + P[:, 0] * Tn[:, 1],
+                      Tn[:, 0] * P[:, 2] + P[:, 0] * Tn[:, 2]]
+        rhs = -np.einsum("nc,nc->n", Tn, Pm - M)
+        keep = np.ones(len(P), dtype=bool)
+        for _ in range(2):
+            coef = np.linalg.lstsq(X[keep], rhs[keep], rcond=None)[0]
+            r = np.abs(X @ coef - rhs)
+            keep = r <= np.quantile(r, 0.8)
+        n = np.array([1.0, -coef[1], -coef[2]])
+        n /= np.linalg.norm(n)
+        v = np.cross(n, [1.0, 0.0, 0.0])
+        sn = np.linalg.norm(v)
+        Rn = _turn(v / sn, np.arctan2(sn, n[0])) if sn > 1e-12 else np.eye(3)
+        o = np.array([coef[0], 0.0, 0.0])            # on the plane
+        if np.arctan2(sn, n[0]) > np.radians(10) or abs(coef[0]) > 0.25:
+            break     # no plane near this one fits (a front too flat across to tell)
+        A, b = Rn @ A, Rn @ b - Rn @ o
+    return A, b
 
 
 def _turn(axis: np.ndarray, angle: float) -> np.ndarray:
@@ -513,11 +1223,21 @@ def find_feature_points(face: FaceModel, *, ids: Optional[Iterable[str]] = None)
     if len(ST) < 50:
         raise FaceNotFoundError(f"no face found: the largest piece of the mesh has only "
                                 f"{len(ST)} triangles")
-    s, R, t, score = _head_frame(SV, tpl)
+    s, R, t, score = _head_frame(SV, tpl, ST)
     Vt = s * SV @ R.T + t                      # target skin in the template frame
     _face_checks(Vt, ST, score)
-    # non-rigid: the template's skin bent onto the target's
-    X = _register(tpl, Vt, ST)
+    # the mid plane at x = 0
+    A, b = _mid_plane(Vt, ST)
+    R, t = A @ R, A @ t + b
+    Vt = s * SV @ R.T + t
+    # the mid-line profile's points (nose, lips), then the template's skin bent onto the
+    # target's, held at them
+    prof_pts = _profile_points(_profile(Vt, ST, 0.6, -2.5), 0.0,
+                               lambda p: bool(_mouth_points(Vt, ST, p)))
+    eye_pts = _eye_points(Vt, ST, tpl)
+    if "2.2" in prof_pts:
+        eye_pts.update(_mouth_points(Vt, ST, 0.5 * (prof_pts["2.2"] + prof_pts["2.3"])))
+    X = _register(tpl, Vt, ST, {**prof_pts, **eye_pts})
     reasons: dict = {}
     pos: dict = {}       # id -> template-frame position on the target
     tie: dict = {}       # id -> stacked vertex index
@@ -535,7 +1255,26 @@ def find_feature_points(face: FaceModel, *, ids: Optional[Iterable[str]] = None)
         pos[k], tie[k] = p, skin_ids[v]
         around = tpl_tree.query_ball_point(tpl.V[i], 0.1)
         resid[k] = float(near_d[around].mean())
-    crisp_ok = _refine(Vt, ST, pos, tie, skin_ids, reasons)
+    if prof_pts:
+        near = cKDTree(Vt).query(np.array(list(prof_pts.values())))[1]
+        for (k, p), v in zip(prof_pts.items(), near):
+            pos[k], tie[k] = p, skin_ids[v]
+    if eye_pts:
+        tri, bary, _ = closest_points(np.array(list(eye_pts.values())), Vt, ST)
+        on = np.einsum("nk,nkc->nc", bary, Vt[ST[tri]])
+        near = cKDTree(Vt).query(on)[1]
+        for k, p, v in zip(eye_pts, on, near):
+            pos[k], tie[k] = p, skin_ids[v]
+    crisp_ok = (_refine(Vt, ST, pos, tie, skin_ids, reasons, "9.3" in prof_pts,
+                        "2.1" in prof_pts)
+                | set(prof_pts) | set(eye_pts))
+    # from the crisp points, or where the registration put them when the geometry had
+    # no mark (a mouth without a groove keeps the template's corners)
+    conv = _convention_points(Vt, ST, pos, set(pos))
+    if conv:
+        near = cKDTree(Vt).query(np.array(list(conv.values())))[1]
+        for (k, p), v in zip(conv.items(), near):
+            pos[k], tie[k] = p, skin_ids[v]
     # 7.1 and other off-surface points: moved with the registration's displacement nearby
     for k, p in tpl.points.items():
         if k in pos or k in _PART_OF:
@@ -571,40 +1310,59 @@ def find_feature_points(face: FaceModel, *, ids: Optional[Iterable[str]] = None)
                        fit={"score": score, "s": s, "R": R, "t": t, "deformed": X})
 
 
-def _register(tpl: _Template, Vt: np.ndarray, ST: np.ndarray) -> np.ndarray:
+def _register(tpl: _Template, Vt: np.ndarray, ST: np.ndarray,
+              profile: Optional[dict] = None) -> np.ndarray:
     """The template's skin bent onto the target's (template frame): started from a warp
-    taking the template's nose tip and opening extremes (mouth, eyes; those both have)
-    onto the target's, which then hold loosely through the non-rigid registration."""
-    src, dst = [tpl.skin_index["9.3"]], [tpl.V[tpl.skin_index["9.3"]]]
+    taking the template's mid-line profile points (:func:`_profile_points`, both
+    profiles read by the same rules; the nose tip alone without them) and opening
+    extremes (mouth, eyes; those both have) onto the target's, which then hold loosely
+    through the non-rigid registration."""
+    src, dst = [], []
+    profile = profile or {}
+    tip = tpl.skin_index["9.3"]
+    for k, p in profile.items():
+        # the template's point read by the same rule, else its own (the mouth's corners:
+        # the reference head's lips barely crease where they meet)
+        ref = tpl.profile.get(k, tpl.eyes.get(k, tpl.points.get(k)))
+        if ref is not None and k not in ("2.3", "2.8", "2.9"):
+            src.append(int(np.argmin(np.linalg.norm(tpl.V - ref, axis=1))))
+            dst.append(p)
+    if not src:
+        src, dst = [tip], [tpl.V[tip]]
+    n_mid = len(src)
     edge = _boundary_vertices(ST, len(Vt))
     for name, (c, lm) in tpl.openings.items():
+        if any(k in profile for k in _EYE_KEYS.get(name, ("8.3", "8.4"))):
+            continue                 # the eye's lid margins (mouth's corners) held already
         got = _opening_landmarks(Vt, edge, c, _opening_boxes(tpl.points)[name][1])
         if got is None:
             continue
         for k, v in lm.items():
             src.append(v)
             dst.append(Vt[got[k]])
-    src = np.array(src)
+    src, keep = np.unique(np.array(src), return_index=True)
+    dst = [dst[i] for i in keep]
     start = tpl.V.copy()
     # a thin-plate warp only when the landmarks surround the face (mouth and both eyes):
     # from fewer (an eye and the nose) it extrapolates wildly
-    if len(src) == 1 + 4 * len(tpl.openings):
+    if len(keep) >= 1 + 4 * len(tpl.openings):
         start = feature_warp(tpl.V[src], np.array(dst), tpl.V)
     start[src] = np.array(dst)
     return register_surface(tpl.V, tpl.T, start, src, Vt, ST)
 
 
-def _refine(Vt, ST, pos, tie, skin_ids, reasons) -> set:
+def _refine(Vt, ST, pos, tie, skin_ids, reasons, prof_has_tip: bool = False,
+            prof_has_chin: bool = False) -> set:
     """Move the crisp points onto the crisp geometry near them (template frame); the ids
     moved.  Nose tip 9.3: the most forward vertex within 0.25 ES of where the registration
     put it; chin 2.1: the menton rule (module docstring) on the target's skin."""
     done = set()
     near = np.flatnonzero(np.linalg.norm(Vt - pos["9.3"], axis=1) < 0.25)
-    if len(near):
+    if len(near) and not prof_has_tip:
         v = near[np.argmax(Vt[near, 2])]
         pos["9.3"], tie["9.3"] = Vt[v], skin_ids[v]
         done.add("9.3")
-    if "8.2" in pos:
+    if "8.2" in pos and not prof_has_chin:
         m = _menton(Vt, ST, {"8.2": pos["8.2"], "2.1": pos["2.1"]})
         if np.linalg.norm(m - pos["2.1"]) < 0.5:
             v = int(np.argmin(np.linalg.norm(Vt - m, axis=1)))

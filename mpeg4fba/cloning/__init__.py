@@ -10,7 +10,8 @@ anti-aliasing), :mod:`~mpeg4fba.cloning.normalise` (the normalised facial space)
 :mod:`~mpeg4fba.cloning.projection` and :mod:`~mpeg4fba.cloning.alignment` (the 2D
 alignment space), :mod:`~mpeg4fba.cloning.lips` (lip regions), :mod:`~mpeg4fba.cloning.parts`
 and :mod:`~mpeg4fba.cloning.rigid` (eyes, teeth, tongue, head), :mod:`~mpeg4fba.cloning.checks`
-(feature points on the mesh, in its units), :mod:`~mpeg4fba.cloning.fmc`
+(feature points on the mesh, in its units), :mod:`~mpeg4fba.cloning.detect` (feature
+points found on a head that has none), :mod:`~mpeg4fba.cloning.fmc`
 (the whole method), :mod:`~mpeg4fba.cloning.local_frames` (Kong et al.'s local-frame
 cloning for faces that share a mesh).
 """
@@ -18,6 +19,8 @@ from __future__ import annotations
 
 from .alignment import REQUIRED_POINTS, FaceSpace, align, alignment_triangles
 from .checks import PlacementError, check_placement
+from .detect import (CRISP_POINTS, FaceNotFoundError, FoundPoints, find_feature_points,
+                     snap_points)
 from .fmc import CloneWarning, FacialMotionCloner, clone, required_points_missing
 from .local_frames import (LocalFrameCloner, LocalFrameWarning, TopologyError,
                            local_frame_clone)
@@ -34,4 +37,6 @@ __all__ = ["clone", "FacialMotionCloner", "LocalFrameCloner", "LocalFrameWarning
            "lip_regions", "slit_regions", "SLITS", "UPPER", "LOWER", "OUTSIDE", "PARTS", "find_parts",
            "Normaliser", "face_center", "point_units", "region_factors",
            "Projection", "choose_axis", "cylindrical_projection", "MOUTH_ANGLE",
-           "PlacementError", "check_placement", "separate_parts", "carry_part_points"]
+           "PlacementError", "check_placement", "separate_parts", "carry_part_points",
+           "find_feature_points", "FoundPoints", "FaceNotFoundError", "snap_points",
+           "CRISP_POINTS"]

@@ -1,0 +1,629 @@
+"""Finding the MPEG-4 feature points on a head mesh that has none, from its geometry alone
+(no model weights, no network).
+
+Route (each step a function below):
+
+1. **Pieces** (:func:`_pieces`): every mesh cut into connected components; the skin is the
+   largest component, the others are candidate parts (eyeballs, teeth, tongue, lashes...).
+2. **Head frame** (:func:`_head_frame`): the reference head's skin
+   (:func:`mpeg4fba.models.reference_head`, the template, which carries all 84 points) is
+   fitted to the target's skin by a trimmed, two-way similarity ICP (rotation, translation,
+   one scale) from each of the 24 axis-aligned up/forward hypotheses; the best fit is
+   kept, which also tilts it into place (faces up to 20 degrees off an axis).
+3. **Is it a face** (:func:`_face_checks`): the fit must be close, the skin bilaterally
+   symmetric about the fitted mid plane, and there must be a mouth and eyes (openings or
+   concave creases); else :class:`FaceNotFoundError` says which was missing.
+4. **Registration**: the template's skin is bent onto the target's
+   (:func:`~mpeg4fba.cloning.surface.register_surface`, coarse to fine) and every template
+   point is carried to the closest point of the target's surface.
+5. **Crisp points** (:func:`_refine`): the points the geometry defines sharply are moved
+   to that geometry (nose tip, chin, mouth corners and mid lips, eye corners and lid
+   middles).
+6. **Parts**: eyeballs (the pupil: the most forward point of a closed round component in
+   the eye), teeth and tongue (components where the template's are), when present.
+
+Units: the work is done in the template's frame (x the face's left, y up, z forward) in
+units of the template's eye separation; results are returned in the face's own units and
+frame.  ``FoundPoints.scale`` is model units per millimetre (taking the template's eye
+separation, 64 mm, for the target's), so ``scale`` is 0.001 for a head in metres, 0.1 in
+centimetres, 1 in millimetres.
+
+Chin convention: 2.1 ("bottom of the chin") is the *menton*, the lowest point of the chin
+on the mid line as seen from the front (the lowest point of the jaw line of a face photo,
+Multi-PIE landmark 8), where the chin's profile turns from facing forward to facing down:
+on the mid-plane profile below the lower lip, the point whose surface normal points 45
+degrees between forward and down.  The reference head's own 2.1 lies further back, under
+the jaw; the landmark convention is what users (and ICT-FaceKit) mean and what they can see.
+
+Example
+-------
+>>> from mpeg4fba.models import reference_head
+>>> head = reference_head(resolution=0.5, seed=3)
+>>> found = find_feature_points(head)
+>>> es = np.linalg.norm(head.points["3.5"] - head.points["3.6"])
+>>> bool(np.linalg.norm(found.points["9.3"] - head.points["9.3"]) < 0.03 * es)
+True
+>>> round(found.scale, 4), found.up.round(3).tolist(), found.forward.round(3).tolist()
+(0.001, [0.0, 1.0, 0.0], [0.0, 0.0, 1.0])
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from functools import lru_cache
+from typing import Iterable, Optional
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from ..fba.face import FaceModel
+from ..fba.featurepoints import FeaturePointSet, normalise_id, point_order
+from ..fba.requirements import FAPU_POINTS, NOT_SURFACE, PART_POINTS, required_points
+from .alignment import REQUIRED_POINTS
+from .parts import is_eyeball, mesh_components
+from .surface import (boundary_loops, closest_points, register_surface, vertex_normals)
+
+__all__ = ["FaceNotFoundError", "FoundPoints", "find_feature_points", "snap_points",
+           "CRISP_POINTS", "TEMPLATE_ES_MM", "FIT_LIMIT", "SYMMETRY_LIMIT"]
+
+
+class FaceNotFoundError(ValueError):
+    """The mesh is too unlike a face to find feature points on it; the message says what
+    was missing (a head-like shape, bilateral symmetry, mouth or eye openings/creases)."""
+
+
+#: The points the geometry defines crisply, which :func:`_refine` (and :func:`snap_points`)
+#: move onto that geometry: nose tip, chin, mouth corners and mid lips, eye corners and
+#: lid middles.
+CRISP_POINTS = ("2.1", "2.2", "2.3", "2.4", "2.5", "3.1", "3.2", "3.3", "3.4", "3.7", "3.8",
+                "3.11", "3.12", "8.1", "8.2", "8.3", "8.4", "9.3")
+
+#: The template's eye separation in millimetres (the reference head's ES0): what
+#: ``FoundPoints.scale`` takes the target's to be.
+TEMPLATE_ES_MM = 64.0
+
+#: How far (trimmed mean distance, both ways, in eye separations) the rigidly fitted
+#: template may lie from the target's skin and the target still be a head.  Heads of other
+#: proportions fit to 0.05-0.11 (ICT-FaceKit identities, full and decimated, 0.08-0.11;
+#: reference-head variants 0.05-0.10); a sphere, box or blob to 0.13-0.15 and a plane
+#: to 0.39.  Only shapes far from any head are refused here (the nose and symmetry tests
+#: do the finer work): too low refuses a head with shoulders or hair, too high lets a
+#: plane through to the other tests, which then name a less telling reason.
+FIT_LIMIT = 0.2
+#: How far (median, eye separations) the front of the skin mirrored in the fitted mid plane
+#: may lie from the skin's surface: heads 0.002-0.015 (a decimated ICT head 0.015), random
+#: blobs up to 0.035.  Too low refuses a slightly asymmetric scan; too high lets a lopsided
+#: blob through to the nose test.
+SYMMETRY_LIMIT = 0.025
+#: How far (eye separations) the nose must stand out in front of the cheeks (the most
+#: forward point near the mid plane between the eyes and the mouth, against the most
+#: forward half an eye separation to either side): heads 0.23-0.72 (the flat-nosed
+#: reference variant nose=0.8 0.23), spheres, boxes, blobs 0.12 at most.
+NOSE_LIMIT = 0.18
+
+# points the template carries that belong to parts, and which part
+_PART_OF = {"3.5": "eye", "3.6": "eye", "9.8": "teeth", "9.9": "teeth", "9.10": "teeth",
+            "9.11": "teeth", "6.1": "tongue", "6.2": "tongue", "6.3": "tongue", "6.4": "tongue"}
+# left/right pairs (the face's left first), for the symmetry part of the confidence
+_PAIRS = (("2.4", "2.5"), ("2.6", "2.7"), ("2.8", "2.9"), ("2.11", "2.12"), ("2.13", "2.14"),
+          ("3.1", "3.2"), ("3.3", "3.4"), ("3.5", "3.6"), ("3.7", "3.12"), ("3.11", "3.8"),
+          ("3.9", "3.10"), ("3.13", "3.14"), ("4.1", "4.2"), ("4.3", "4.4"), ("4.5", "4.6"),
+          ("5.1", "5.2"), ("5.3", "5.4"), ("8.3", "8.4"), ("8.5", "8.6"), ("8.7", "8.8"),
+          ("8.10", "8.9"), ("9.1", "9.2"), ("9.5", "9.4"), ("9.7", "9.6"), ("9.13", "9.14"),
+          ("10.1", "10.2"), ("10.3", "10.4"), ("10.5", "10.6"), ("10.7", "10.8"),
+          ("10.9", "10.10"), ("11.2", "11.3"))
+_MIRROR = {a: b for a, b in _PAIRS} | {b: a for a, b in _PAIRS}
+
+
+@dataclass(frozen=True)
+class FoundPoints:
+    """The feature points found on a face.
+
+    Attributes
+    ----------
+    points : FeaturePointSet
+        Positions in the face's own units and frame, each tied to the nearest vertex
+        ``(mesh, vertex)`` of the mesh it lies on (7.1, inside the neck, has no tie).
+    confidence : dict
+        Point id -> confidence in [0, 1] (see :func:`_confidence`).
+    missing : tuple
+        Required ids (:func:`mpeg4fba.fba.requirements.required_points`) the geometry
+        does not have (no eyeballs, no tongue...), in the standard's order.
+    reasons : dict
+        Id -> why it is missing, or why its confidence is low.
+    up, forward : numpy.ndarray
+        Unit vectors of the head frame found, in model coordinates.
+    scale : float
+        Model units per millimetre (the target's eye separation taken as 64 mm).
+    """
+
+    points: FeaturePointSet
+    confidence: dict
+    missing: tuple
+    reasons: dict
+    up: np.ndarray
+    forward: np.ndarray
+    scale: float
+    fit: dict = field(default_factory=dict, compare=False)
+
+    def lowest(self) -> tuple:
+        """(id, confidence) of the least confident point found."""
+        if not self.confidence:
+            return (None, 0.0)
+        k = min(self.confidence, key=lambda i: (self.confidence[i], i))
+        return k, float(self.confidence[k])
+
+
+# -- the template --------------------------------------------------------------------------
+@dataclass(frozen=True)
+class _Template:
+    V: np.ndarray          # skin vertices, template frame, eye separations
+    T: np.ndarray
+    points: dict           # id -> position (template frame, ES units)
+    skin_index: dict       # id -> skin vertex for skin points
+    parts: dict            # kind -> (vertices, triangles) in the template frame
+    sample: np.ndarray     # skin vertex indices for the rigid fit
+    es: float              # metres
+
+
+@lru_cache(maxsize=1)
+def _template() -> _Template:
+    from ..models.reference_head import reference_head
+    head = reference_head(resolution=1.0)
+    es = float(np.linalg.norm(head.points["3.5"] - head.points["3.6"]))
+    V = head.world_vertices("Skin") / es
+    T = head.meshes["Skin"].triangles
+    pts = {k: head.points[k] / es for k in head.points}
+    skin_index = {k: v for k, (m, v) in head.points.vertices.items() if m == "Skin"}
+    # the menton convention for 2.1 (module docstring), applied to the template too
+    pts["2.1"] = _menton(V, T, pts)
+    skin_index["2.1"] = int(np.argmin(np.linalg.norm(V - pts["2.1"], axis=1)))
+    parts = {}
+    for kind, names in (("eye", ("LeftEyeball", "RightEyeball")), ("teeth", ("UpperTeeth", "LowerTeeth")),
+                        ("tongue", ("Tongue",))):
+        for n in names:
+            parts[n] = (head.world_vertices(n) / es, head.meshes[n].triangles)
+    # an even sample of the skin for the rigid fit (the face counts double: it matters)
+    rng = np.random.default_rng(0)
+    face = np.flatnonzero(V[:, 2] > 0.3)
+    rest = np.flatnonzero(V[:, 2] <= 0.3)
+    sample = np.sort(np.concatenate([rng.choice(face, min(len(face), 900), replace=False),
+                                     rng.choice(rest, min(len(rest), 500), replace=False)]))
+    return _Template(V, T, pts, skin_index, parts, sample, es)
+
+
+def _menton(V: np.ndarray, T: np.ndarray, pts: dict) -> np.ndarray:
+    """2.1 by the menton rule on a skin in the head frame (x left, y up, z forward): on the
+    mid-plane profile below the lower lip (8.2), the point whose normal points 45 degrees
+    between forward and down; ``pts`` needs 8.2 and 2.10 (or 8.2 alone)."""
+    N = vertex_normals(V, T)
+    lip = pts["8.2"]
+    width = 0.04
+    near = np.flatnonzero((np.abs(V[:, 0] - lip[0]) < width) & (V[:, 1] < lip[1])
+                          & (V[:, 2] > lip[2] - 0.9) & (N[:, 2] > -0.2))
+    if not len(near):
+        return pts.get("2.1", lip)
+    want = np.array([0.0, -np.sqrt(0.5), np.sqrt(0.5)])
+    # the first 45-degree point below the lip: take the most forward candidates with a
+    # normal close to 45 degrees, then the highest of them (the chin, not the neck)
+    score = N[near] @ want
+    good = near[score > 0.97]
+    if not len(good):
+        good = near[np.argsort(-score)[:3]]
+    # chin, not throat: of those, the most forward
+    return V[good[np.argmax(V[good, 2])]]
+
+
+# -- pieces --------------------------------------------------------------------------------
+@dataclass
+class _Pieces:
+    V: np.ndarray            # all world vertices stacked
+    T: np.ndarray            # all triangles (stacked indices)
+    mesh_of: np.ndarray      # per stacked vertex: index into names
+    local: np.ndarray        # per stacked vertex: index in its mesh
+    comp: np.ndarray         # per stacked vertex: global component id
+    names: list
+    skin: int                # component id of the skin
+
+
+def _pieces(face: FaceModel) -> _Pieces:
+    verts, tris, mesh_of, local, comp, names, first, ncomp = [], [], [], [], [], [], 0, 0
+    for n, m in face.meshes.items():
+        if not len(m.vertices) or not len(m.triangles):
+            continue
+        v = face.world_vertices(n)
+        lab = mesh_components(m.triangles, len(v))
+        verts.append(v)
+        tris.append(np.asarray(m.triangles, dtype=np.int64) + first)
+        mesh_of.append(np.full(len(v), len(names)))
+        local.append(np.arange(len(v)))
+        comp.append(lab + ncomp)
+        names.append(n)
+        first += len(v)
+        ncomp += int(lab.max()) + 1
+    if not verts:
+        raise FaceNotFoundError("the face has no mesh with triangles: nothing to find "
+                                "feature points on")
+    V, T = np.vstack(verts), np.vstack(tris)
+    comp = np.concatenate(comp)
+    # the skin: the component with the most triangles (the head is the biggest piece)
+    tri_count = np.bincount(comp[T[:, 0]], minlength=ncomp)
+    skin = int(np.argmax(tri_count))
+    return _Pieces(V, T, np.concatenate(mesh_of), np.concatenate(local), comp, names, skin)
+
+
+# -- the head frame --------------------------------------------------------------------------
+def _similarity(P: np.ndarray, Q: np.ndarray) -> tuple:
+    """(s, R, t) minimising |s R P + t - Q|^2 (Umeyama)."""
+    mp, mq = P.mean(0), Q.mean(0)
+    A, B = P - mp, Q - mq
+    U, S, Wt = np.linalg.svd(B.T @ A)
+    D = np.eye(3)
+    D[2, 2] = np.sign(np.linalg.det(U @ Wt)) or 1.0
+    R = U @ D @ Wt
+    s = float((S * np.diag(D)).sum() / max((A * A).sum(), 1e-300))
+    return s, R, mq - s * R @ mp
+
+
+def _axis_rotations() -> list:
+    """The 24 rotations taking an axis-aligned (up, forward) of the model to the template's
+    (+y, +z): rows (left, up, forward) in model coordinates."""
+    axes = np.vstack([np.eye(3), -np.eye(3)])
+    out = []
+    for up in axes:
+        for fwd in axes:
+            if abs(up @ fwd) > 0.5:
+                continue
+            out.append(np.array([np.cross(up, fwd), up, fwd]))
+    return out
+
+
+def _icp(tpl: np.ndarray, tpl_tree: cKDTree, tgt: np.ndarray, tgt_tree: cKDTree,
+         s: float, R: np.ndarray, t: np.ndarray, iterations: int, keep: float = 0.8) -> tuple:
+    """Trimmed two-way similarity ICP of the target's sample ``tgt`` (model coordinates)
+    onto the template's ``tpl`` (template frame): (s, R, t, score), the map q = s R p + t,
+    score the mean of the kept distances (template units)."""
+    score = np.inf
+    for _ in range(iterations):
+        q = s * tgt @ R.T + t
+        d1, i1 = tpl_tree.query(q)
+        back = (tpl - t) @ R / s
+        d2, i2 = tgt_tree.query(back)
+        d2 = d2 * s
+        k1 = d1 <= np.quantile(d1, keep)
+        k2 = d2 <= np.quantile(d2, keep)
+        score = 0.5 * (d1[k1].mean() + d2[k2].mean())
+        P = np.vstack([tgt[k1], tgt[i2[k2]]])
+        Q = np.vstack([tpl[i1[k1]], tpl[k2]])
+        s, R, t = _similarity(P, Q)
+    return s, R, t, float(score)
+
+
+def _head_frame(skin_v: np.ndarray, tpl: _Template) -> tuple:
+    """(s, R, t, score) of the best similarity from the target's skin (model coordinates)
+    to the template frame, over the 24 axis-aligned starts."""
+    rng = np.random.default_rng(1)
+    sample = skin_v[rng.choice(len(skin_v), min(len(skin_v), 1500), replace=False)]
+    A = tpl.V[tpl.sample]
+    a_tree = cKDTree(A)
+    b_tree = cKDTree(sample)
+    c = sample.mean(0)
+    radius = np.sqrt(((sample - c) ** 2).sum(1).mean())
+    t_radius = np.sqrt(((A - A.mean(0)) ** 2).sum(1).mean())
+    s0 = t_radius / max(radius, 1e-300)
+    trials = []
+    for R0 in _axis_rotations():
+        t0 = A.mean(0) - s0 * R0 @ c
+        trials.append(_icp(A, a_tree, sample, b_tree, s0, R0, t0, 6))
+    trials.sort(key=lambda r: r[3])
+    best = [_icp(A, a_tree, sample, b_tree, *r[:3], 20) for r in trials[:3]]
+    s, R, t, score = min(best, key=lambda r: r[3])
+    # a head tilted off the axes (up to 20 degrees and a little more) can hold ICP in a
+    # local minimum: restart from the best turned by 15 degrees about each axis
+    for axis in np.eye(3):
+        for sign in (-1, 1):
+            turn = _turn(axis, sign * np.radians(15))
+            c_t = tpl.V[tpl.sample].mean(0)
+            R1 = turn @ R
+            t1 = c_t + turn @ (t - c_t)
+            best.append(_icp(A, a_tree, sample, b_tree, s, R1, t1, 20))
+    s, R, t, _ = min(best, key=lambda r: r[3])
+    return _icp(A, a_tree, sample, b_tree, s, R, t, 15, keep=0.9)
+
+
+def _turn(axis: np.ndarray, angle: float) -> np.ndarray:
+    """Rotation by ``angle`` about the unit ``axis`` (Rodrigues)."""
+    K = np.array([[0, -axis[2], axis[1]], [axis[2], 0, -axis[0]], [-axis[1], axis[0], 0]])
+    return np.eye(3) + np.sin(angle) * K + (1 - np.cos(angle)) * K @ K
+
+
+# -- is it a face ------------------------------------------------------------------------------
+def _face_checks(Vt: np.ndarray, T: np.ndarray, score: float) -> None:
+    """Raise FaceNotFoundError when the skin ``Vt`` (template frame) is no face: too far
+    from a head's shape, not symmetric, or without a nose."""
+    if score > FIT_LIMIT:
+        raise FaceNotFoundError(
+            f"no face found: the mesh's largest piece is not head-shaped (the reference head "
+            f"fits it no closer than {score:.3f} eye separations on average, more than "
+            f"{FIT_LIMIT}); no bilateral symmetry, nose, mouth or eyes were found")
+    fm = (Vt[:, 2] > 0.2) & (Vt[:, 1] > -2.2) & (Vt[:, 1] < 1.2)
+    if fm.sum() < 20:
+        raise FaceNotFoundError("no face found: the mesh has no front where a face would be")
+    _, _, d = closest_points(Vt[fm] * [-1, 1, 1], Vt, T)
+    asym = float(np.median(d))
+    if asym > SYMMETRY_LIMIT:
+        raise FaceNotFoundError(
+            f"no face found: no bilateral symmetry (the front mirrored in the best mid plane "
+            f"lies {asym:.3f} eye separations from the surface in the median, more than "
+            f"{SYMMETRY_LIMIT})")
+    band = (Vt[:, 1] > -1.0) & (Vt[:, 1] < 0.0)
+    mid = band & (np.abs(Vt[:, 0]) < 0.15)
+    side = band & (np.abs(Vt[:, 0]) > 0.45) & (np.abs(Vt[:, 0]) < 0.65)
+    nose = (Vt[mid, 2].max() if mid.any() else -np.inf) - (Vt[side, 2].max() if side.any() else 0.0)
+    if not nose >= NOSE_LIMIT:
+        raise FaceNotFoundError(
+            f"no face found: symmetric, but no nose stands out on the mid line (it stands "
+            f"{max(nose, -9.99):.2f} eye separations in front of the cheeks, less than "
+            f"{NOSE_LIMIT}); no mouth or eye openings or creases can be placed")
+
+
+def _feature_evidence(Vt: np.ndarray, T: np.ndarray, where: np.ndarray, radius: float) -> float:
+    """How much a concave crease or an opening there is within ``radius`` of ``where``
+    (template frame): the largest of (boundary edges nearby) and the concavity (the mean
+    curvature sign of the umbrella Laplacian against the normal, in eye separations)."""
+    near = np.flatnonzero(np.linalg.norm(Vt - where, axis=1) < radius)
+    if not len(near):
+        return 0.0
+    loops = boundary_loops(T)
+    on_loop = np.zeros(len(Vt), dtype=bool)
+    for l in loops:
+        on_loop[l] = True
+    if on_loop[near].sum() >= 3:
+        return 1.0
+    N = vertex_normals(Vt, T)
+    # umbrella Laplacian: mean of the neighbours minus the vertex; along the normal it is
+    # positive in a concave crease
+    e = np.concatenate([T[:, [0, 1]], T[:, [1, 2]], T[:, [2, 0]]])
+    e = np.vstack([e, e[:, ::-1]])
+    acc = np.zeros_like(Vt)
+    cnt = np.zeros(len(Vt))
+    np.add.at(acc, e[:, 0], Vt[e[:, 1]])
+    np.add.at(cnt, e[:, 0], 1)
+    lap = acc / np.maximum(cnt, 1)[:, None] - Vt
+    edge = np.sqrt(np.mean(((Vt[e[:, 0]] - Vt[e[:, 1]]) ** 2).sum(1)))
+    concave = (lap[near] * N[near]).sum(1) / max(edge, 1e-12)
+    return float(np.clip(np.quantile(concave, 0.98) / 0.3, 0.0, 1.0))
+
+
+# -- the whole step --------------------------------------------------------------------------
+def find_feature_points(face: FaceModel, *, ids: Optional[Iterable[str]] = None) -> FoundPoints:
+    """The feature points of ``face`` (which needs none), found from its geometry.
+
+    ``ids``: the points wanted (default: every point the template has where the face's
+    geometry has it: all skin points, plus the eyeballs', teeth's and tongue's when those
+    are present).  ``missing`` lists the required points
+    (:func:`~mpeg4fba.fba.requirements.required_points` for every FAP, the FAPU and
+    cloning's :data:`~mpeg4fba.cloning.REQUIRED_POINTS`) the face's geometry lacks.
+
+    Raises :class:`FaceNotFoundError` when the face is too unlike a face.
+    """
+    want = None if ids is None else {normalise_id(k) for k in ids}
+    tpl = _template()
+    pieces = _pieces(face)
+    skin_mask = pieces.comp == pieces.skin
+    skin_ids = np.flatnonzero(skin_mask)
+    # skin triangles, renumbered
+    tri_skin = skin_mask[pieces.T[:, 0]]
+    remap = np.full(len(pieces.V), -1)
+    remap[skin_ids] = np.arange(len(skin_ids))
+    ST = remap[pieces.T[tri_skin]]
+    SV = pieces.V[skin_ids]
+    if len(ST) < 50:
+        raise FaceNotFoundError(f"no face found: the largest piece of the mesh has only "
+                                f"{len(ST)} triangles")
+    s, R, t, score = _head_frame(SV, tpl)
+    Vt = s * SV @ R.T + t                      # target skin in the template frame
+    _face_checks(Vt, ST, score)
+    # non-rigid: the template's skin bent onto the target's
+    X = register_surface(tpl.V, tpl.T, tpl.V, np.zeros(0, dtype=np.int64), Vt, ST)
+    reasons: dict = {}
+    pos: dict = {}       # id -> template-frame position on the target
+    tie: dict = {}       # id -> stacked vertex index
+    resid: dict = {}
+    skin_points = [k for k in tpl.skin_index]
+    idx = np.array([tpl.skin_index[k] for k in skin_points])
+    tri, bary, dist = closest_points(X[idx], Vt, ST)
+    q = np.einsum("nk,nkc->nc", bary, Vt[ST[tri]])
+    corner = ST[tri, np.argmax(bary, axis=1)]
+    # registration residual near each point: the mean distance of the deformed template's
+    # vertices within 0.1 ES of it to the target
+    near_d = cKDTree(Vt).query(X)[0]
+    tpl_tree = cKDTree(tpl.V)
+    for k, p, v, i in zip(skin_points, q, corner, idx):
+        pos[k], tie[k] = p, skin_ids[v]
+        around = tpl_tree.query_ball_point(tpl.V[i], 0.1)
+        resid[k] = float(near_d[around].mean())
+    crisp_ok = _refine(Vt, ST, pos, tie, skin_ids, reasons)
+    # 7.1 and other off-surface points: moved with the registration's displacement nearby
+    for k, p in tpl.points.items():
+        if k in pos or k in _PART_OF:
+            continue
+        _, nn = tpl_tree.query(p, k=8)
+        pos[k] = p + (X[nn] - tpl.V[nn]).mean(0)
+        resid[k] = float(near_d[nn].mean())
+    parts_found = _parts(pieces, s, R, t, X, tpl, pos, tie, reasons)
+    # results in model coordinates
+    inv = lambda p: (np.asarray(p) - t) @ R / s
+    conf = _confidence(pos, resid, crisp_ok, reasons)
+    present = sorted({_PART_OF[k] for k in pos if k in _PART_OF})
+    need = set(required_points(range(3, 69), parts=present, fapu=True, base=REQUIRED_POINTS))
+    for kind in ("eye", "teeth", "tongue"):
+        need |= set(PART_POINTS[kind])
+    need |= set(FAPU_POINTS)
+    if want is not None:
+        need &= want
+    missing = tuple(point_order(k for k in need if k not in pos))
+    for k in missing:
+        reasons.setdefault(k, "not found")
+    keep = [k for k in pos if want is None or k in want]
+    positions = {k: inv(pos[k]) for k in keep}
+    ties = {k: (pieces.names[pieces.mesh_of[tie[k]]], int(pieces.local[tie[k]]))
+            for k in keep if k in tie}
+    up = R[1] / np.linalg.norm(R[1])
+    fwd = R[2] / np.linalg.norm(R[2])
+    scale = 1.0 / (s * TEMPLATE_ES_MM)
+    return FoundPoints(FeaturePointSet(positions, ties), {k: conf[k] for k in keep}, missing,
+                       {k: v for k, v in reasons.items() if k in keep or k in missing},
+                       up, fwd, float(scale),
+                       fit={"score": score, "s": s, "R": R, "t": t, "deformed": X})
+
+
+def _refine(Vt, ST, pos, tie, skin_ids, reasons) -> set:
+    """Move the crisp points onto the crisp geometry near them; the ids moved."""
+    return set()
+
+
+def _parts(pieces: _Pieces, s, R, t, X, tpl: _Template, pos, tie, reasons) -> set:
+    """Eyeball, teeth and tongue points from the components where the template has those
+    parts (template frame); the kinds found."""
+    found = set()
+    Vt = s * pieces.V @ R.T + t
+    others = np.unique(pieces.comp[pieces.comp != pieces.skin])
+    if not len(others):
+        for k in _PART_OF:
+            reasons[k] = f"no {_PART_OF[k]} mesh: the face is one piece (its skin)"
+        return found
+    # the template's parts moved by the registration's displacement nearby
+    tree = cKDTree(tpl.V)
+
+    def moved(P):
+        _, nn = tree.query(P, k=8)
+        return P + (X[nn] - tpl.V[nn]).mean(1)
+
+    order = np.argsort(pieces.comp, kind="stable")
+    bounds = np.searchsorted(pieces.comp[order], np.arange(pieces.comp.max() + 2))
+    members = {int(c): order[bounds[c]:bounds[c + 1]] for c in others}
+    cent = {c: Vt[m].mean(0) for c, m in members.items()}
+    ext = {c: float(np.ptp(Vt[m], axis=0).max()) for c, m in members.items()}
+    T = pieces.T
+    closed = {}
+    tc = pieces.comp[T[:, 0]]
+    for c in others:
+        closed[int(c)] = False
+    e = np.sort(np.concatenate([T[:, [0, 1]], T[:, [1, 2]], T[:, [2, 0]]]), axis=1)
+    _, inv, cnt = np.unique(e, axis=0, return_inverse=True, return_counts=True)
+    open_comp = np.unique(pieces.comp[e[cnt[inv.ravel()] == 1, 0]])
+    for c in others:
+        closed[int(c)] = int(c) not in set(open_comp.tolist())
+    used = set()
+    # eyes
+    for fp, name in (("3.5", "LeftEyeball"), ("3.6", "RightEyeball")):
+        ev, _ = tpl.parts[name]
+        centre = moved(ev.mean(0)[None])[0]
+        radius = np.ptp(ev, axis=0).max() / 2
+        cand = [c for c in members if np.linalg.norm(cent[c] - centre) < 0.6 * radius * 2
+                and ext[c] < 4 * radius and closed[c]]
+        balls = [c for c in cand if is_eyeball(Vt[members[c]], 1.0)
+                 and ext[c] > 0.8 * radius]
+        if not balls:
+            reasons[fp] = "no eyeball: no closed round piece in the eye" if not cand else \
+                "no eyeball: the pieces in the eye are not round"
+            continue
+        ball = min(balls, key=lambda c: np.linalg.norm(cent[c] - centre))
+        bc, br = cent[ball], ext[ball] / 2
+        allv = np.concatenate([members[c] for c in cand
+                               if np.linalg.norm(cent[c] - bc) < br])
+        v = allv[np.argmax(Vt[allv, 2])]
+        pos[fp], tie[fp] = Vt[v], v
+        used.update(c for c in cand if np.linalg.norm(cent[c] - bc) < br)
+        found.add("eye")
+    # teeth and tongue: each remaining piece goes to the template part (moved with the
+    # registration) it lies closest to, when it lies on it (median within 0.06 ES, about
+    # 4 mm) and is no bigger than it (a mouth cavity or gums-and-palate piece is bigger)
+    names = ("UpperTeeth", "LowerTeeth", "Tongue")
+    moved_parts = {n: moved(tpl.parts[n][0]) for n in names}
+    trees = {n: cKDTree(v) for n, v in moved_parts.items()}
+    size = {n: float(np.ptp(v, axis=0).max()) for n, v in moved_parts.items()}
+    take = {n: [] for n in names}
+    for c in members:
+        if c in used:
+            continue
+        d = {n: float(np.median(trees[n].query(Vt[members[c]])[0])) for n in names}
+        n = min(d, key=d.get)
+        if d[n] < 0.06 and ext[c] <= 1.3 * size[n]:
+            take[n].append(c)
+    for name, pts in (("UpperTeeth", ("9.8", "9.10")), ("LowerTeeth", ("9.11", "9.9")),
+                      ("Tongue", ("6.1", "6.2", "6.3", "6.4"))):
+        kind = "tongue" if name == "Tongue" else "teeth"
+        if not take[name]:
+            for k in pts:
+                reasons[k] = f"no {kind} mesh where the {name} would be"
+            continue
+        allv = np.concatenate([members[c] for c in take[name]])
+        P = Vt[allv]
+        # the incisors (or the tongue's middle): within 0.04 ES of the mid plane
+        mid = allv[np.abs(P[:, 0]) < 0.04] if (np.abs(P[:, 0]) < 0.04).any() else allv
+        if kind == "teeth":
+            hi, lo = mid[np.argmax(Vt[mid, 1])], mid[np.argmin(Vt[mid, 1])]
+            pos[pts[0]], tie[pts[0]] = Vt[hi], hi
+            pos[pts[1]], tie[pts[1]] = Vt[lo], lo
+        else:
+            tip = mid[np.argmax(Vt[mid, 2])]
+            pos["6.1"], tie["6.1"] = Vt[tip], tip
+            body = mid[np.argmax(Vt[mid, 1])]
+            pos["6.2"], tie["6.2"] = Vt[body], body
+            l, r = allv[np.argmax(P[:, 0])], allv[np.argmin(P[:, 0])]
+            pos["6.3"], tie["6.3"] = Vt[l], l
+            pos["6.4"], tie["6.4"] = Vt[r], r
+        found.add(kind)
+    return found
+
+
+def _confidence(pos, resid, crisp_ok, reasons) -> dict:
+    """Point id -> confidence in [0, 1]: ``fit * symmetry``, where fit =
+    ``exp(-(residual / 0.05)^2)`` with the registration residual near the point in eye
+    separations (0.05 ES, about 3 mm, halves it roughly), raised half way to 1 when a crisp
+    refinement succeeded, and symmetry = ``exp(-(mismatch / 0.08)^2)`` with the mismatch
+    of a left/right pair mirrored in the mid plane (1 for points on the mid line)."""
+    out = {}
+    for k, p in pos.items():
+        r = resid.get(k, 0.0)
+        fit = float(np.exp(-(r / 0.05) ** 2))
+        if k in crisp_ok:
+            fit = 0.5 * (1 + fit)
+        sym = 1.0
+        m = _MIRROR.get(k)
+        if m in pos:
+            mis = float(np.linalg.norm(np.asarray(pos[k]) - np.asarray(pos[m]) * [-1, 1, 1]))
+            sym = float(np.exp(-(mis / 0.08) ** 2))
+        c = float(np.clip(fit * sym, 0.0, 1.0))
+        out[k] = c
+        if c < 0.5 and k not in reasons:
+            reasons[k] = (f"registration residual {r:.3f} ES near it" if fit < 0.7 else
+                          "its left/right partner does not mirror it")
+    return out
+
+
+def snap_points(face: FaceModel, points: FeaturePointSet, ids=CRISP_POINTS) -> tuple:
+    """(snapped FeaturePointSet, id -> distance moved in model units): the given crisp
+    points among ``ids`` moved to the crisp geometry found near them (within a quarter of
+    the eye separation; further, the given point is kept: the user knows better)."""
+    found = find_feature_points(face)
+    pos = {k: points[k] for k in points}
+    ties = dict(points.vertices)
+    es = None
+    if "3.5" in points and "3.6" in points:
+        es = float(np.linalg.norm(points["3.5"] - points["3.6"]))
+    if not es:
+        es = TEMPLATE_ES_MM * found.scale
+    moved = {}
+    for k in ids:
+        k = normalise_id(k)
+        if k not in pos or k not in found.points:
+            continue
+        d = float(np.linalg.norm(found.points[k] - pos[k]))
+        if d <= 0.25 * es:
+            pos[k] = found.points[k]
+            if found.points.vertex(k) is not None:
+                ties[k] = found.points.vertex(k)
+            moved[k] = d
+    return FeaturePointSet(pos, ties), moved

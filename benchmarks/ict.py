@@ -18,6 +18,13 @@ the viewer, so the face's own left is +x.
   :func:`ict_face_decimated` (the Skin decimated, the other meshes kept).
 * :func:`skin_regions` (mouth, eyes, brows, rest) and :func:`flipped_triangles` for
   measuring results.
+* :data:`LANDMARK_POINTS`, the table of which MPEG-4 feature points ICT's 68 Multi-PIE
+  landmarks define (and how), :func:`landmark_points` (them on any identity) and
+  :func:`landmark_truth` (given points: the landmarks' where they define a point, our
+  picked ones elsewhere): the truth of ``benchmarks/bench_find_points.py``.
+* Heads as users give them: :class:`Placement` / :func:`random_placement` (up +Y or +Z,
+  facing any horizontal axis, tilted up to 20 degrees, scale 0.1, 1 or 10) and
+  :func:`placed_face` (moved, eyeballs dropped on request, points stripped).
 
 Mesh split (checked on the data, see :func:`mesh_layout`): ``face`` + ``head_neck`` are
 the Skin; ``teeth`` is 32 connected components, one per tooth, grouped into UpperTeeth and

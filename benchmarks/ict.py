@@ -595,16 +595,23 @@ def decimation_report(vertices: np.ndarray, triangles: np.ndarray, kept: np.ndar
 
 def ict_face_decimated(data: IctData, vertices: Optional[np.ndarray] = None,
                        fraction: float = 0.25, *, name: str = "ict_decimated",
-                       fp_ids: Optional[Mapping] = None, tongue_tip: bool = False) -> FaceModel:
+                       fp_ids: Optional[Mapping] = None, tongue_tip: bool = False,
+                       keep_ids: Sequence[int] = ()) -> FaceModel:
     """:func:`ict_face` with its Skin decimated to about ``fraction`` of its vertices
     (:func:`decimate` on ``vertices``, feature point vertices kept, their ties renumbered;
     the other meshes unchanged).  ``face.regions["ict_ids:Skin"]`` holds the original ids
-    of the kept Skin vertices, so ground truth is ``split_deltas(face, delta)``."""
+    of the kept Skin vertices, so ground truth is ``split_deltas(face, delta)``.
+    ``keep_ids``: more original (ICT) vertex ids to keep, where on the Skin (e.g. the
+    landmarks, ``data.landmarks``)."""
     face = ict_face(data, vertices, name=name, fp_ids=fp_ids, tongue_tip=tongue_tip)
     skin = face.meshes["Skin"]
     ties = face.points.vertices
     on_skin = {k: i for k, (m, i) in ties.items() if m == "Skin"}
-    kept, tris = decimate(skin.vertices, skin.triangles, fraction, keep=list(on_skin.values()))
+    ids = face.regions[IDS_PREFIX + "Skin"]
+    extra = np.searchsorted(ids, np.asarray(keep_ids, dtype=np.int64))
+    extra = extra[(extra < len(ids)) & (ids[np.minimum(extra, len(ids) - 1)] == np.asarray(keep_ids, dtype=np.int64))]
+    kept, tris = decimate(skin.vertices, skin.triangles, fraction,
+                          keep=list(on_skin.values()) + extra.tolist())
     face.meshes["Skin"] = FaceMesh("Skin", skin.vertices[kept], tris, skin.parent)
     ids = face.regions[IDS_PREFIX + "Skin"]
     front = np.zeros(len(ids), dtype=bool)

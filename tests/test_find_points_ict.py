@@ -170,7 +170,7 @@ def found(data, detect):
     for seed, (mesh, eyes), pl in CASES:
         V = ict.identity(data, seed)
         truth = (ict.ict_face(data, V) if mesh == "full"
-                 else ict.ict_face_decimated(data, V, _FRACTION))
+                 else ict.ict_face_decimated(data, V, _FRACTION, keep_ids=data.landmarks))
         world = ict.placed_face(truth, pl, eyes=eyes)
         try:
             with warnings.catch_warnings():

@@ -174,6 +174,8 @@ class _Template:
     face: np.ndarray       # skin vertex indices of the face (brows to chin, ear to ear)
     openings: dict         # name -> (centre, {landmark: skin vertex}) of the mouth and eyes
     es: float              # metres
+    profile: dict          # the mid-line points of its profile (:func:`_profile_points`)
+    eyes: dict             # its lid-margin points (:func:`_eye_points`)
 
 
 @lru_cache(maxsize=1)
@@ -210,7 +212,12 @@ def _template() -> _Template:
         got = _opening_landmarks(V, edge, c, half)
         if got is not None:
             openings[name] = (c, {k: int(v) for k, v in got.items()})
-    return _Template(V, T, pts, skin_index, parts, sample, face, openings, es)
+    prof = _profile_points(_profile(V, T, 0.6, -2.5), 0.0)
+    eyes = {}
+    for name, keys in _EYE_KEYS.items():
+        got = _eye_opening(V, T, 0.5 * (pts[keys[0]] + pts[keys[1]]), name == "left eye")
+        eyes.update({k: got[r] for k, r in zip(keys, ("out", "in", "top", "bottom")) if r in got})
+    return _Template(V, T, pts, skin_index, parts, sample, face, openings, es, prof, eyes)
 
 
 # the template's opening widths (eye separations): an eye's, the mouth's (by box size)
@@ -283,6 +290,359 @@ def _menton(V: np.ndarray, T: np.ndarray, pts: dict) -> np.ndarray:
     if not len(good):
         return pts.get("2.1", lip)
     return V[good[np.argmin(V[good, 1])]]
+
+
+# -- the mid-plane profile ---------------------------------------------------------------------
+#: Step (eye separations) of the mid-plane profile's height grid: 0.01 ES (about 0.6 mm),
+#: finer than any ICT or reference-head edge that crosses the mid plane at the lips.
+PROFILE_STEP = 0.01
+
+
+def _plane_cut(V: np.ndarray, T: np.ndarray, x0: float = 0.0) -> tuple:
+    """(a, b): the segments (k, 3) x 2 where the triangles cross the plane x = ``x0``.  A
+    vertex counts as on the plane's negative side when x < x0, else on its positive side
+    (half-open), so a triangle is cut by two of its edges or none, and a symmetric mesh's
+    mid-line vertices (x = x0 exactly) are cut points too."""
+    side = V[:, 0] < x0
+    s = side[T]
+    cut = s.any(1) & ~s.all(1)
+    Tc = T[cut]
+    sc = s[cut]
+    # the odd vertex out, then the two edges from it
+    odd = np.where(sc.sum(1) == 1, np.argmax(sc, 1), np.argmin(sc, 1))
+    r = np.arange(len(Tc))
+    o, p, q = Tc[r, odd], Tc[r, (odd + 1) % 3], Tc[r, (odd + 2) % 3]
+
+    def cross(i, j):
+        ai, aj = V[i, 0] - x0, V[j, 0] - x0
+        w = ai / (ai - aj)
+        return V[i] + w[:, None] * (V[j] - V[i])
+
+    return cross(o, p), cross(o, q)
+
+
+@dataclass(frozen=True)
+class _Profile:
+    """The front of the mid-plane profile: ``z[i]``, the most forward point of the cut at
+    height ``y[i]`` (template frame, eye separations), smoothed; ``raw`` unsmoothed (NaN
+    where nothing was cut)."""
+    y: np.ndarray
+    z: np.ndarray
+    raw: np.ndarray
+
+    def at(self, i: int) -> np.ndarray:
+        return np.array([0.0, self.y[i], self.z[i]])
+
+
+def _profile(Vt: np.ndarray, T: np.ndarray, top: float, bottom: float) -> _Profile:
+    """The front envelope of the skin's mid-plane cut between heights ``bottom`` and
+    ``top`` (template frame), on a :data:`PROFILE_STEP` grid, gaps filled linearly and
+    smoothed by a Gaussian of 1.5 steps (a decimated mesh's facets, not its shape)."""
+    A, B = _plane_cut(Vt, T)
+    y = np.arange(bottom, top + PROFILE_STEP / 2, PROFILE_STEP)
+    raw = np.full(len(y), -np.inf)
+    if len(A):
+        # each segment rasterised onto the grid (the heights it spans), the most forward kept
+        lo, hi = np.minimum(A[:, 1], B[:, 1]), np.maximum(A[:, 1], B[:, 1])
+        i0 = np.ceil((lo - bottom) / PROFILE_STEP).astype(int)
+        i1 = np.floor((hi - bottom) / PROFILE_STEP).astype(int)
+        i0, i1 = np.maximum(i0, 0), np.minimum(i1, len(y) - 1)
+        n = np.maximum(i1 - i0 + 1, 0)
+        seg = np.repeat(np.arange(len(A)), n)
+        idx = np.arange(n.sum()) - np.repeat(np.cumsum(n) - n, n) + i0[seg]
+        dy = B[seg, 1] - A[seg, 1]
+        w = np.where(np.abs(dy) > 1e-12, (y[idx] - A[seg, 1]) / np.where(dy == 0, 1, dy), 0.5)
+        zz = A[seg, 2] + np.clip(w, 0, 1) * (B[seg, 2] - A[seg, 2])
+        np.maximum.at(raw, idx, zz)
+    have = np.isfinite(raw)
+    if have.sum() < 2:
+        return _Profile(y, np.zeros_like(y), np.where(have, raw, np.nan))
+    z = np.interp(y, y[have], raw[have])
+    k = np.arange(-4, 5)
+    g = np.exp(-0.5 * (k / 1.5) ** 2)
+    zs = np.convolve(np.pad(z, 4, mode="edge"), g / g.sum(), mode="valid")
+    return _Profile(y, zs, np.where(have, raw, np.nan))
+
+
+def _farthest(yy: np.ndarray, zz: np.ndarray, i: int, j: int) -> int:
+    """The index in [i, j] of the profile point furthest in front of (+z side of) the chord
+    from point i to point j: where the profile's tangent is parallel to the chord."""
+    a, b = np.array([yy[i], zz[i]]), np.array([yy[j], zz[j]])
+    d = b - a
+    n = np.array([-d[1], d[0]])
+    if n[1] < 0:
+        n = -n
+    seg = np.c_[yy[i:j + 1], zz[i:j + 1]]
+    return i + int(np.argmax((seg - a) @ n))
+
+
+def _profile_points(prof: _Profile, eye_y: float) -> dict:
+    """Mid-line points read off the profile (template frame), walking down from the eye
+    line ``eye_y``: {"9.3", "9.15", "8.1", "2.2", "2.3", "8.2"} where found.
+
+    - the nose: the first peak below the eye line that the profile then falls from by
+      0.15 ES or more before rising as high again (an upper lip standing as far forward as
+      the nose does not qualify: its fall to the stomion is about 0.1 ES; nor the
+      glabella, whose fall to the nasion is smaller still);
+    - 8.1 (labrale superius): the upper lip's most forward point, the first peak below
+      the nose's fall; 8.2 (labrale inferius): the lower lip's, the next peak, then moved
+      down to where the lower lip's bulge turns towards the labiomental fold (the point
+      furthest in front of the chord from the stomion to the fold: Multi-PIE's landmark
+      57 lies on the vermilion's lower edge, not on the bulge's front);
+    - 2.2 and 2.3 (the inner lips' middles): where the lips meet, the deepest point
+      between 8.1 and 8.2 when the lips touch; when they part (the profile steps back
+      more than 0.12 ES into the mouth between them), the upper lip's lowest and the lower
+      lip's highest front points, either side of the gap;
+    - 9.15 (subnasale): the point furthest behind the chord from the nose tip to 8.1
+      (the corner where the columella meets the lip);
+    - 9.3 (pronasale): the point furthest in front of the chord from the sellion (the
+      deepest point between the eye line and the nose) to the subnasale: the tip as
+      seen square to the nose's own axis, so it does not slide with the head's pitch.
+    """
+    from scipy.signal import find_peaks
+    y, z = prof.y, prof.z
+    order = np.argsort(-y)          # top down
+    yy, zz = y[order], z[order]
+    start = int(np.searchsorted(-yy, -eye_y))
+    out = {}
+    peaks, _ = find_peaks(zz, prominence=0.005)
+    peaks = peaks[peaks >= start]
+    tip = None
+    for p in peaks:
+        after = zz[p:]
+        higher = np.flatnonzero(after > zz[p])
+        seg = after[:higher[0]] if len(higher) else after
+        if zz[p] - seg.min() >= 0.15:
+            tip = p
+            break
+    if tip is None:
+        return out
+    out["9.3"] = np.array([0.0, yy[tip], zz[tip]])
+    fallen = np.flatnonzero(zz[tip:] < zz[tip] - 0.15)
+    if not len(fallen):
+        return out
+    below = peaks[peaks > tip + fallen[0]]
+    if len(below) < 2:
+        return out
+    ul = below[0]
+    out["8.1"] = np.array([0.0, yy[ul], zz[ul]])
+    # curvature (second difference over 2 steps, + concave: a crease; - convex: a rim)
+    d2 = np.zeros_like(zz)
+    d2[2:-2] = zz[:-4] - 2 * zz[2:-2] + zz[4:]
+    win = int(0.35 / PROFILE_STEP)
+    rz = prof.raw[order]
+    # the lips' meeting: a gap where the raw front steps back into the mouth, else the
+    # first crease at least a fifth as sharp as the sharpest within 0.35 ES below 8.1
+    ref = zz[ul]
+    span = slice(ul, min(ul + win, len(zz) - 1) + 1)
+    deep = ~(rz[span] > ref - 0.12)
+    if deep.any():
+        g0 = int(np.argmax(deep))                       # the first run of deep bins
+        run = np.flatnonzero(~deep[g0:])
+        g1 = g0 + (run[0] if len(run) else len(deep) - g0) - 1
+        up, lo = ul + g0 - 1, ul + g1 + 1
+    if deep.any():
+        # the lips part where the front steps back (a jump of 0.04 ES in one step, or no
+        # cut at all); a smooth fall (the labiomental fold of a retruded lower lip), or a
+        # "gap" taller than 0.12 ES, is no parting
+        r = rz[up:lo + 1]
+        jump = ~np.isfinite(r).all() or np.nanmax(np.abs(np.diff(r))) > 0.04
+        if not jump or lo - up > 0.12 / PROFILE_STEP:
+            deep[:] = False
+    if not deep.any():
+        c = d2[span]
+        strong = np.flatnonzero((c >= 0.2 * c.max()) & (c > 0))
+        peaks_c, _ = find_peaks(c)
+        firsts = [p for p in peaks_c if p in set(strong.tolist())]
+        up = lo = ul + (firsts[0] if firsts else int(np.argmax(c)))
+    out["2.2"] = np.array([0.0, yy[up], rz[up] if np.isfinite(rz[up]) else zz[up]])
+    out["2.3"] = np.array([0.0, yy[lo], rz[lo] if np.isfinite(rz[lo]) else zz[lo]])
+    # 8.2: the lower lip's rim, the most convex point between the lips' meeting and the
+    # labiomental fold (the deepest point within 0.4 ES below it)
+    end = min(lo + int(0.4 / PROFILE_STEP), len(zz) - 1)
+    fold = lo + int(np.argmin(zz[lo:end + 1]))
+    if fold > lo + 4:
+        i8 = lo + 2 + int(np.argmin(d2[lo + 2:fold - 1]))
+        out["8.2"] = np.array([0.0, yy[i8], zz[i8]])
+    # subnasale: furthest behind the chord tip -> upper lip
+    a, b = np.array([yy[tip], zz[tip]]), np.array([yy[ul], zz[ul]])
+    d = b - a
+    n = np.array([-d[1], d[0]])
+    if n[1] > 0:
+        n = -n
+    sn = tip + int(np.argmax((np.c_[yy[tip:ul + 1], zz[tip:ul + 1]] - a) @ n))
+    out["9.15"] = np.array([0.0, yy[sn], zz[sn]])
+    # the tip square to the nose's axis (sellion -> subnasale)
+    top = max(start - int(0.3 / PROFILE_STEP), 0)
+    se = top + int(np.argmin(zz[top:tip + 1]))
+    t2 = _farthest(yy, zz, se, sn)
+    out["9.3"] = np.array([0.0, yy[t2], zz[t2]])
+    return out
+
+
+# -- the eye openings, seen from the front ----------------------------------------------------
+#: Cell size (eye separations) of the front-view depth maps of the eyes: 0.01 ES.
+DEPTH_CELL = 0.01
+
+
+def _depth_map(Vt: np.ndarray, T: np.ndarray, lo: np.ndarray, hi: np.ndarray,
+               cell: float = DEPTH_CELL) -> np.ndarray:
+    """The skin seen from the front (+z) in the box ``lo``..``hi`` (template frame):
+    (nx, ny) grid of the most forward z of the triangles over each cell centre, NaN where
+    no triangle is.  Each triangle in the box is sampled on a barycentric lattice fine
+    enough for the cell size (its longest edge over half a cell), so a decimated mesh's
+    large triangles leave no gaps."""
+    nx = int(np.ceil((hi[0] - lo[0]) / cell))
+    ny = int(np.ceil((hi[1] - lo[1]) / cell))
+    out = np.full((nx, ny), -np.inf)
+    P = Vt[T]                                             # (m, 3, 3)
+    inb = ((P[:, :, 0].max(1) >= lo[0]) & (P[:, :, 0].min(1) <= hi[0])
+           & (P[:, :, 1].max(1) >= lo[1]) & (P[:, :, 1].min(1) <= hi[1])
+           & (P[:, :, 2].max(1) >= lo[2]))
+    P = P[inb]
+    if not len(P):
+        return np.full((nx, ny), np.nan)
+    edge = np.linalg.norm(P - P[:, [1, 2, 0]], axis=2).max(1)
+    nsub = np.clip(np.ceil(edge / (0.5 * cell)).astype(int), 1, 64)
+    for n in np.unique(nsub):
+        tri = P[nsub == n]
+        i, j = np.meshgrid(np.arange(n + 1), np.arange(n + 1), indexing="ij")
+        keep = i + j <= n
+        a, b = i[keep] / n, j[keep] / n
+        w = np.c_[1 - a - b, a, b]                        # (k, 3)
+        Q = np.einsum("kv,mvc->mkc", w, tri).reshape(-1, 3)
+        ix = np.floor((Q[:, 0] - lo[0]) / cell).astype(int)
+        iy = np.floor((Q[:, 1] - lo[1]) / cell).astype(int)
+        ok = (ix >= 0) & (ix < nx) & (iy >= 0) & (iy < ny) & (Q[:, 2] >= lo[2])
+        np.maximum.at(out, (ix[ok], iy[ok]), Q[ok, 2])
+    out[~np.isfinite(out)] = np.nan
+    return out
+
+
+#: Each eye's lid-margin points: outer corner, inner corner, upper and lower lid middles.
+_EYE_KEYS = {"left eye": ("3.7", "3.11", "3.1", "3.3"), "right eye": ("3.12", "3.8", "3.2", "3.4")}
+
+
+def _eye_points(Vt: np.ndarray, T: np.ndarray, tpl) -> dict:
+    """The lid-margin points of both eyes (:func:`_eye_opening`), each eye searched round
+    where the template's eye lies after the rigid fit; an eye without an opening of an
+    eye's size there gives none."""
+    out = {}
+    for name, keys in _EYE_KEYS.items():
+        c = 0.5 * (tpl.points[keys[0]] + tpl.points[keys[1]])
+        got = _eye_opening(Vt, T, c, name == "left eye")
+        out.update({k: got[r] for k, r in zip(keys, ("out", "in", "top", "bottom")) if r in got})
+    return out
+
+
+def _groove_end(D: np.ndarray, i: int, j: int, step: int, reach: int = 3,
+                depth: float = 0.01) -> Optional[tuple]:
+    """Following the groove of the depth map ``D`` (front-view z, -inf where empty) from
+    the opening's extreme cell (i, j) outward along x (``step`` = +-1): at each column the
+    deepest cell within two cells of the last one's height, kept while it lies ``depth``
+    (0.01 ES, 0.6 mm) or more behind the mean of the cells ``reach`` rows above and below
+    it (a groove, not the smooth skin beyond the corner); the last groove cell, or None."""
+    last = None
+    ny = D.shape[1]
+    for _ in range(int(0.15 / DEPTH_CELL)):
+        i += step
+        if not 0 <= i < D.shape[0]:
+            break
+        js = np.arange(max(j - 2, reach), min(j + 3, ny - reach))
+        if not len(js):
+            break
+        col = D[i, js]
+        if not np.isfinite(col).any():
+            continue                      # still in the opening
+        jb = int(js[np.argmax(np.where(np.isfinite(col), -col, -np.inf))])
+        z, up, dn = D[i, jb], D[i, jb + reach], D[i, jb - reach]
+        if not (np.isfinite(up) and np.isfinite(dn)) or 0.5 * (up + dn) - z < depth:
+            break
+        last, j = (i, jb), jb
+    return last
+
+
+def _eye_opening(Vt: np.ndarray, T: np.ndarray, centre: np.ndarray, left: bool) -> dict:
+    """The lid margins of the eye round ``centre`` (template frame) from the opening the
+    skin leaves as seen from the front: {"out", "in", "top", "bottom"} -> point on the
+    skin's front edge, or {} when no opening of an eye's size is there.
+
+    The opening is the connected empty part of the front-view depth map
+    (:func:`_depth_map`, skin only: an eyeball is another piece) nearest the centre, 0.15
+    to 0.6 ES wide and less tall than wide; its corners are its lateral extremes, its lid
+    middles the top and bottom of its column half way between them, each taken on the
+    skin just outside the opening (the most forward surface there: the lid margin's front
+    edge, not the hole's boundary, which can lie a fifth of an eye separation deeper)."""
+    from scipy import ndimage
+    half = np.array([0.4, 0.3])
+    lo = np.array([centre[0] - half[0], centre[1] - half[1], centre[2] - 0.45])
+    hi = np.array([centre[0] + half[0], centre[1] + half[1]])
+    D = _depth_map(Vt, T, lo, hi)
+    empty = np.isnan(D)
+    lab, n = ndimage.label(empty)
+    if not n:
+        return {}
+    ci = int((centre[0] - lo[0]) / DEPTH_CELL)
+    cj = int((centre[1] - lo[1]) / DEPTH_CELL)
+    best, best_d = None, np.inf
+    border = set(np.unique(np.r_[lab[0], lab[-1], lab[:, 0], lab[:, -1]]).tolist())
+    for k in range(1, n + 1):
+        if k in border:
+            continue
+        ii, jj = np.nonzero(lab == k)
+        w = (ii.max() - ii.min() + 1) * DEPTH_CELL
+        h = (jj.max() - jj.min() + 1) * DEPTH_CELL
+        if not (0.15 <= w <= 0.6 and h < w):
+            continue
+        dd = np.hypot(ii.mean() - ci, jj.mean() - cj)
+        if dd < best_d:
+            best, best_d = (ii, jj), dd
+    if best is None:
+        return {}
+    ii, jj = best
+    x = lo[0] + (ii + 0.5) * DEPTH_CELL
+    y = lo[1] + (jj + 0.5) * DEPTH_CELL
+    filled = np.where(np.isnan(D), -np.inf, D)
+
+    def front(i, j, di, dj):
+        # the first filled cell outward from (i, j), its centre at the front surface
+        for _ in range(6):
+            i, j = i + di, j + dj
+            if not (0 <= i < D.shape[0] and 0 <= j < D.shape[1]):
+                break
+            if np.isfinite(filled[i, j]):
+                return np.array([lo[0] + (i + 0.5) * DEPTH_CELL, lo[1] + (j + 0.5) * DEPTH_CELL,
+                                 filled[i, j]])
+        return None
+
+    out = {}
+    imax, imin = ii.max(), ii.min()
+    jr = int(np.round(jj[ii == imax].mean()))
+    jl = int(np.round(jj[ii == imin].mean()))
+    pr, pl = front(imax, jr, 1, 0), front(imin, jl, -1, 0)
+    # the inner corner: the lids meet medially beyond the opening, over a groove (a
+    # caruncle's pocket) that can reach a twentieth of an eye separation further; the
+    # corner is where that groove ends
+    med = -1 if left else 1
+    ic, jc = (imin, jl) if left else (imax, jr)
+    groove = _groove_end(filled, ic, jc, med)
+    if groove is not None:
+        g = np.array([lo[0] + (groove[0] + 0.5) * DEPTH_CELL,
+                      lo[1] + (groove[1] + 0.5) * DEPTH_CELL, filled[groove]])
+        if left:
+            pl = g
+        else:
+            pr = g
+    icol = int(np.round(0.5 * (imax + imin)))
+    col = jj[ii == icol]
+    if not len(col) or pr is None or pl is None:
+        return {}
+    pt, pb = front(icol, col.max(), 0, 1), front(icol, col.min(), 0, -1)
+    if pt is None or pb is None:
+        return {}
+    out["out"], out["in"] = (pr, pl) if left else (pl, pr)
+    out["top"], out["bottom"] = pt, pb
+    return out
 
 
 # -- pieces --------------------------------------------------------------------------------
@@ -370,7 +730,7 @@ def _icp(tpl: np.ndarray, tpl_tree: cKDTree, tgt: np.ndarray, tgt_tree: cKDTree,
     return s, R, t, float(score)
 
 
-def _head_frame(skin_v: np.ndarray, tpl: _Template) -> tuple:
+def _head_frame(skin_v: np.ndarray, tpl: _Template, ST: Optional[np.ndarray] = None) -> tuple:
     """(s, R, t, score) of the best similarity from the target's skin (model coordinates)
     to the template frame, over the 24 axis-aligned starts."""
     rng = np.random.default_rng(1)
@@ -404,23 +764,76 @@ def _head_frame(skin_v: np.ndarray, tpl: _Template) -> tuple:
     # then the face alone: the template's face (a subset of any head) onto the target,
     # one way, so the skull's and neck's proportions no longer pull the features off
     F = tpl.V[tpl.face]
-    nose_tpl = tpl.points["9.3"]
+    nose_tpl = tpl.profile.get("9.3", tpl.points["9.3"])
     for rounds in range(2):
         for _ in range(15):
             back = (F - t) @ R / s
             d, i = b_all.query(back)
             k = d <= np.quantile(d, 0.9)
             s, R, t = _similarity(skin_v[i[k]], F[k])
-        # the nose tip, the most forward point near the mid line, sets the translation
-        # (the face fit can settle a third of an eye separation up or down a long face)
+        # the nose tip sets the translation (the face fit can settle a third of an eye
+        # separation up or down a long face): the first peak of the mid-plane profile
+        # below the eye line that the profile then falls from like a nose
+        # (:func:`_profile_points`); without triangles, the most forward point near the
+        # mid line
         q = s * skin_v @ R.T + t
-        box = (np.abs(q[:, 0]) < 0.3) & (np.abs(q[:, 1] - nose_tpl[1]) < 0.8) \
-            & (q[:, 2] > nose_tpl[2] - 1.0)
-        if not box.any():
-            break
-        tip = q[box][np.argmax(q[box, 2])]
-        t = t + (nose_tpl - tip) * [1, 1, 1]
+        tip = None
+        if ST is not None:
+            prof = _profile(q, ST, 0.6, -2.5)
+            tip = _profile_points(prof, 0.0).get("9.3")
+        if tip is None:
+            box = (np.abs(q[:, 0]) < 0.3) & (np.abs(q[:, 1] - nose_tpl[1]) < 0.8) \
+                & (q[:, 2] > nose_tpl[2] - 1.0)
+            if not box.any():
+                break
+            tip = q[box][np.argmax(q[box, 2])]
+        t = t + (nose_tpl - tip) * [0, 1, 1]
     return s, R, t, score
+
+
+def _mid_plane(Vt: np.ndarray, T: np.ndarray, iterations: int = 6) -> tuple:
+    """(A, b): the rotation and offset that put the skin's plane of bilateral symmetry at
+    x = 0 (template frame): ``Vt @ A.T + b`` is symmetric about x = 0.
+
+    The front of the face (brows to chin, within an eye separation of the mid line;
+    1,500 vertices at most) is mirrored in the current plane, each mirrored vertex is
+    matched to the closest point of the surface, and the plane x = a + b y + c z is the
+    one whose mirror puts the mirrored vertices on their matches' tangent planes (linear
+    least squares, point to plane, the worst fifth trimmed); six rounds.  The rigid fit of the symmetric template leaves the plane
+    a few percent of an eye separation off (the rest of the head pulls it); the
+    profile's points are read on this plane."""
+    A, b = np.eye(3), np.zeros(3)
+    sel = np.flatnonzero((Vt[:, 2] > 0.5) & (Vt[:, 1] > -2.0) & (Vt[:, 1] < 0.8)
+                         & (np.abs(Vt[:, 0]) < 1.0))
+    if len(sel) < 30:
+        return A, b
+    sel = sel[::max(1, len(sel) // 1500)]
+    for _ in range(iterations):
+        W = Vt @ A.T + b
+        P = W[sel]
+        Pm = P * [-1, 1, 1]
+        tri, bary, _ = closest_points(Pm, W, T)
+        M = np.einsum("nk,nkc->nc", bary, W[T[tri]])
+        Tn = np.cross(W[T[tri, 1]] - W[T[tri, 0]], W[T[tri, 2]] - W[T[tri, 0]])
+        Tn /= np.maximum(np.linalg.norm(Tn, axis=1), 1e-300)[:, None]
+        # point to plane: the mirror in x = a + b y + c z (small b, c) moves a mirrored
+        # point by 2 (a + b y + c z) along x; that move should cancel its distance to the
+        # match's tangent plane
+        X = 2 * Tn[:, :1] * np.c_[np.ones(len(P)), P[:, 1], P[:, 2]]
+        rhs = -np.einsum("nc,nc->n", Tn, Pm - M)
+        keep = np.ones(len(P), dtype=bool)
+        for _ in range(2):
+            coef = np.linalg.lstsq(X[keep], rhs[keep], rcond=None)[0]
+            r = np.abs(X @ coef - rhs)
+            keep = r <= np.quantile(r, 0.8)
+        n = np.array([1.0, -coef[1], -coef[2]])
+        n /= np.linalg.norm(n)
+        v = np.cross(n, [1.0, 0.0, 0.0])
+        sn = np.linalg.norm(v)
+        Rn = _turn(v / sn, np.arctan2(sn, n[0])) if sn > 1e-12 else np.eye(3)
+        o = np.array([coef[0], 0.0, 0.0])            # on the plane
+        A, b = Rn @ A, Rn @ b - Rn @ o
+    return A, b
 
 
 def _turn(axis: np.ndarray, angle: float) -> np.ndarray:
@@ -513,11 +926,18 @@ def find_feature_points(face: FaceModel, *, ids: Optional[Iterable[str]] = None)
     if len(ST) < 50:
         raise FaceNotFoundError(f"no face found: the largest piece of the mesh has only "
                                 f"{len(ST)} triangles")
-    s, R, t, score = _head_frame(SV, tpl)
+    s, R, t, score = _head_frame(SV, tpl, ST)
     Vt = s * SV @ R.T + t                      # target skin in the template frame
     _face_checks(Vt, ST, score)
-    # non-rigid: the template's skin bent onto the target's
-    X = _register(tpl, Vt, ST)
+    # the mid plane at x = 0
+    A, b = _mid_plane(Vt, ST)
+    R, t = A @ R, A @ t + b
+    Vt = s * SV @ R.T + t
+    # the mid-line profile's points (nose, lips), then the template's skin bent onto the
+    # target's, held at them
+    prof_pts = _profile_points(_profile(Vt, ST, 0.6, -2.5), 0.0)
+    eye_pts = _eye_points(Vt, ST, tpl)
+    X = _register(tpl, Vt, ST, {**prof_pts, **eye_pts})
     reasons: dict = {}
     pos: dict = {}       # id -> template-frame position on the target
     tie: dict = {}       # id -> stacked vertex index
@@ -535,7 +955,18 @@ def find_feature_points(face: FaceModel, *, ids: Optional[Iterable[str]] = None)
         pos[k], tie[k] = p, skin_ids[v]
         around = tpl_tree.query_ball_point(tpl.V[i], 0.1)
         resid[k] = float(near_d[around].mean())
-    crisp_ok = _refine(Vt, ST, pos, tie, skin_ids, reasons)
+    if prof_pts:
+        near = cKDTree(Vt).query(np.array(list(prof_pts.values())))[1]
+        for (k, p), v in zip(prof_pts.items(), near):
+            pos[k], tie[k] = p, skin_ids[v]
+    if eye_pts:
+        tri, bary, _ = closest_points(np.array(list(eye_pts.values())), Vt, ST)
+        on = np.einsum("nk,nkc->nc", bary, Vt[ST[tri]])
+        near = cKDTree(Vt).query(on)[1]
+        for k, p, v in zip(eye_pts, on, near):
+            pos[k], tie[k] = p, skin_ids[v]
+    crisp_ok = (_refine(Vt, ST, pos, tie, skin_ids, reasons, "9.3" in prof_pts)
+                | set(prof_pts) | set(eye_pts))
     # 7.1 and other off-surface points: moved with the registration's displacement nearby
     for k, p in tpl.points.items():
         if k in pos or k in _PART_OF:
@@ -570,36 +1001,52 @@ def find_feature_points(face: FaceModel, *, ids: Optional[Iterable[str]] = None)
                        fit={"score": score, "s": s, "R": R, "t": t, "deformed": X})
 
 
-def _register(tpl: _Template, Vt: np.ndarray, ST: np.ndarray) -> np.ndarray:
+def _register(tpl: _Template, Vt: np.ndarray, ST: np.ndarray,
+              profile: Optional[dict] = None) -> np.ndarray:
     """The template's skin bent onto the target's (template frame): started from a warp
-    taking the template's nose tip and opening extremes (mouth, eyes; those both have)
-    onto the target's, which then hold loosely through the non-rigid registration."""
-    src, dst = [tpl.skin_index["9.3"]], [tpl.V[tpl.skin_index["9.3"]]]
+    taking the template's mid-line profile points (:func:`_profile_points`, both
+    profiles read by the same rules; the nose tip alone without them) and opening
+    extremes (mouth, eyes; those both have) onto the target's, which then hold loosely
+    through the non-rigid registration."""
+    src, dst = [], []
+    profile = profile or {}
+    tip = tpl.skin_index["9.3"]
+    for k, p in profile.items():
+        ref = tpl.profile.get(k, tpl.eyes.get(k))
+        if ref is not None and k != "2.3":
+            src.append(int(np.argmin(np.linalg.norm(tpl.V - ref, axis=1))))
+            dst.append(p)
+    if not src:
+        src, dst = [tip], [tpl.V[tip]]
+    n_mid = len(src)
     edge = _boundary_vertices(ST, len(Vt))
     for name, (c, lm) in tpl.openings.items():
+        if name != "mouth" and any(k in profile for k in _EYE_KEYS[name]):
+            continue                 # the eye's lid margins are held already
         got = _opening_landmarks(Vt, edge, c, _opening_boxes(tpl.points)[name][1])
         if got is None:
             continue
         for k, v in lm.items():
             src.append(v)
             dst.append(Vt[got[k]])
-    src = np.array(src)
+    src, keep = np.unique(np.array(src), return_index=True)
+    dst = [dst[i] for i in keep]
     start = tpl.V.copy()
     # a thin-plate warp only when the landmarks surround the face (mouth and both eyes):
     # from fewer (an eye and the nose) it extrapolates wildly
-    if len(src) == 1 + 4 * len(tpl.openings):
+    if len(keep) >= 1 + 4 * len(tpl.openings):
         start = feature_warp(tpl.V[src], np.array(dst), tpl.V)
     start[src] = np.array(dst)
     return register_surface(tpl.V, tpl.T, start, src, Vt, ST)
 
 
-def _refine(Vt, ST, pos, tie, skin_ids, reasons) -> set:
+def _refine(Vt, ST, pos, tie, skin_ids, reasons, prof_has_tip: bool = False) -> set:
     """Move the crisp points onto the crisp geometry near them (template frame); the ids
     moved.  Nose tip 9.3: the most forward vertex within 0.25 ES of where the registration
     put it; chin 2.1: the menton rule (module docstring) on the target's skin."""
     done = set()
     near = np.flatnonzero(np.linalg.norm(Vt - pos["9.3"], axis=1) < 0.25)
-    if len(near):
+    if len(near) and not prof_has_tip:
         v = near[np.argmax(Vt[near, 2])]
         pos["9.3"], tie["9.3"] = Vt[v], skin_ids[v]
         done.add("9.3")

@@ -3,6 +3,7 @@
 
     python -m benchmarks.bench_find_points [--identities N] [--seed S] [--quick]
                                            [--clone K] [--noise K] [--draws D] [--json PATH]
+                                           [--md PATH]
 
 Reads ``<shared>/data/ict-facekit`` in place (``$MPEG4FBA_SHARED`` or ``<repo>/../shared``;
 says so and exits 0 when it is absent).  **Changes are judged on fresh draws**
@@ -61,6 +62,7 @@ top of its output.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import platform
 import subprocess
@@ -428,12 +430,12 @@ def report_plausibility(cases: list) -> dict:
     print(f"{counts['checked']} found points checked on {len(ok)} heads: "
           f"{len(counts['off_surface'])} off a surface (> {ON_SURFACE} % ES0), "
           f"{len(counts['outside_box'])} outside the head's box, "
-          f"{len(counts['wrong_side'])} on the wrong side of the mid plane.")
+          f"{len(counts['wrong_side'])} on the wrong side of the mid plane.\n")
     for what in ("off_surface", "outside_box", "wrong_side"):
         for line in counts[what][:8]:
-            print(f"  {what}: {line}")
+            print(f"- {what}: {line}")
         if len(counts[what]) > 8:
-            print(f"  {what}: ... and {len(counts[what]) - 8} more")
+            print(f"- {what}: ... and {len(counts[what]) - 8} more")
     per = {}
     for c in ok:
         for k, row in c["plausibility"]["points"].items():
@@ -550,6 +552,24 @@ def report_noise(rows: list) -> dict:
 
 
 # -- main ----------------------------------------------------------------------------------------
+class _Tee:
+    """Writes to ``stream`` and keeps a copy (``text``)."""
+
+    def __init__(self, stream):
+        self.stream, self.parts = stream, []
+
+    def write(self, s):
+        self.parts.append(s)
+        return self.stream.write(s)
+
+    def flush(self):
+        self.stream.flush()
+
+    @property
+    def text(self) -> str:
+        return "".join(self.parts)
+
+
 def git_commit() -> str:
     try:
         return subprocess.run(["git", "-C", str(ROOT), "rev-parse", "--short", "HEAD"],
@@ -571,6 +591,8 @@ def main(argv=None) -> int:
                     help="noise clonings on the first K of those (default 8; --quick 0)")
     ap.add_argument("--draws", type=int, default=2, help="noise draws per level and target")
     ap.add_argument("--json", type=Path, default=None, help="write all results here")
+    ap.add_argument("--md", type=Path, default=None,
+                    help="write the tables (and the per-head lines) as a markdown page here")
     args = ap.parse_args(argv)
     try:
         data = ict.load_ict()
@@ -590,6 +612,9 @@ def main(argv=None) -> int:
     n_noise = min(n_clone, args.noise if args.noise is not None else (0 if args.quick else 8))
     det = load_detector()
     t_start = time.perf_counter()
+    progress = _Tee(sys.stdout)
+    stack = contextlib.ExitStack()
+    stack.enter_context(contextlib.redirect_stdout(progress))
     print(f"# find_feature_points on ICT-FaceKit: {n} identities x {len(VARIANTS)} heads, {draw}")
     print(f"detector: {det.name}")
     print(f"command: python -m benchmarks.bench_find_points {' '.join(argv if argv is not None else sys.argv[1:])}")
@@ -652,15 +677,29 @@ def main(argv=None) -> int:
                     f"{x['mm']:g}{'s' if x['snap'] else ''} {x.get('max', float('nan')):.2f}"
                     for x in noise_rows if x["name"] == name), flush=True)
 
+    stack.close()
     wall = time.perf_counter() - t_start
-    summary = {"points": report_points(cases), "plausibility": report_plausibility(cases),
-               "raised": report_raised(cases), "time": report_time(cases)}
-    if pairs:
-        summary["cloning"] = report_cloning(pairs)
-    if noise_rows:
-        summary["noise"] = report_noise(noise_rows)
-    print(f"\nwall time {wall / 60:.1f} min ({n} identities, {len(cases)} heads, {len(pairs)} "
-          f"cloning pairs, {len(noise_rows)} noise clonings); detector: {det.name}")
+    tables = _Tee(sys.stdout)
+    with contextlib.redirect_stdout(tables):
+        summary = {"points": report_points(cases), "plausibility": report_plausibility(cases),
+                   "raised": report_raised(cases), "time": report_time(cases)}
+        if pairs:
+            summary["cloning"] = report_cloning(pairs)
+        if noise_rows:
+            summary["noise"] = report_noise(noise_rows)
+        print(f"\nwall time {wall / 60:.1f} min ({n} identities, {len(cases)} heads, {len(pairs)} "
+              f"cloning pairs, {len(noise_rows)} noise clonings); detector: {det.name}")
+    if args.md:
+        head = progress.text.splitlines()
+        page = ["# Automatic feature points on ICT-FaceKit heads (bench_find_points)", "",
+                "Written by `python -m benchmarks.bench_find_points` (see its docstring for the "
+                "method; the landmark table is `benchmarks.ict.LANDMARK_POINTS`).", "",
+                *[f"- {line.lstrip('# ')}" for line in head[:4]],
+                f"- wall time {wall / 60:.1f} min", "", tables.text.strip(), "",
+                "### Per head", "", "```", *head[4:], "```", ""]
+        args.md.parent.mkdir(parents=True, exist_ok=True)
+        args.md.write_text("\n".join(page), encoding="utf-8")
+        print(f"wrote {args.md}")
     if args.json:
         doc = {"detector": det.name, "real_detector": det.real, "draw": draw, "seeds": seeds,
                "commit": git_commit(), "wall_seconds": wall, "goals": GOALS,

@@ -276,3 +276,18 @@ def test_a_head_without_eyeballs_says_where_its_pupils_are_or_that_they_are_miss
         res = detect.find_feature_points(world)
     for fp in ("3.5", "3.6"):
         assert fp in res.points or (fp in res.missing and fp in res.reasons), fp
+
+
+def test_the_benchmark_measures_given_points_as_exact(data):
+    """The harness's own zero check: a stand-in "detector" that gives back the landmark
+    points (placed like the head) scores 0 on every landmark point, on every surface, on
+    the right side, for a head lying on its back at scale 10 without eyeballs."""
+    from benchmarks import bench_find_points as bench
+    det = bench.Detector("stand-in", None, lambda f, p, ids=(): (p, {}), (), False)
+    ident = bench.draw_identity(data, 0, bench.REGRESSION_SEEDS[0])
+    ident.placements[3] = CASES[1][2]
+    res, head = bench.run_case(det, ident, 3)
+    assert "raised" not in res and not res["landmark_missing"]
+    assert max(res["errors"].values()) < 1e-9
+    checks = res["plausibility"]["points"].values()
+    assert all(r["on_surface"] and r["in_box"] and r.get("side_ok", True) for r in checks)

@@ -519,6 +519,110 @@ def _depth_map(Vt: np.ndarray, T: np.ndarray, lo: np.ndarray, hi: np.ndarray,
     return out
 
 
+#: Where Multi-PIE's inner lip corners (landmarks 60/64, MPEG-4 2.4/2.5) lie on a closed
+#: mouth, as a fraction of the way from the mid line to the commissure along the lips'
+#: contact groove: 0.875 (the inner corners sit an eighth of the mouth's half width
+#: inside the commissures: 0.86-0.89 on ICT-FaceKit identities, measured on the mean
+#: face and four random identities; a closed mouth's contact line has no geometric mark
+#: there).  An open mouth's inner corners are its opening's lateral ends instead.
+INNER_CORNER = 0.875
+
+
+def _groove(D: np.ndarray, i: int, j: int, step: int, reach: int = 3,
+            depth: float = 0.01) -> list:
+    """The cells (i, j) of the groove of the depth map ``D`` (front-view z, -inf where
+    empty) followed from (i, j) along x (``step`` = +-1): at each column the deepest cell
+    within two cells of the last one's height (an empty cell is deepest: an opening),
+    while it lies ``depth`` (0.01 ES, 0.6 mm) or more behind the mean of the cells
+    ``reach`` rows above and below it (a groove, not the smooth skin beyond its end)."""
+    out = []
+    ny = D.shape[1]
+    for _ in range(D.shape[0]):
+        i += step
+        if not 0 <= i < D.shape[0]:
+            break
+        js = np.arange(max(j - 2, reach), min(j + 3, ny - reach))
+        if not len(js):
+            break
+        jb = int(js[np.argmin(D[i, js])])
+        z, up, dn = D[i, jb], D[i, jb + reach], D[i, jb - reach]
+        if np.isfinite(z) and (not (np.isfinite(up) and np.isfinite(dn))
+                               or 0.5 * (up + dn) - z < depth):
+            break
+        out.append((i, jb))
+        j = jb
+    return out
+
+
+def _mouth_points(Vt: np.ndarray, T: np.ndarray, stomion: np.ndarray) -> dict:
+    """The mouth's corners from the lips' contact groove seen from the front (template
+    frame): the groove (:func:`_groove`) of the skin's depth map followed from the
+    stomion (the profile's lips' meeting) to each side; its ends are the commissures
+    (8.3, 8.4: the outer corners); the inner corners (2.4, 2.5) are the opening's
+    lateral ends when the groove runs through an opening seen from the front, else the
+    groove's points :data:`INNER_CORNER` of the way out; 2.6-2.9 (the inner lips'
+    midpoints) on the groove half way to the inner corners (its edges above and below
+    when it is open there).  {} without a groove a mouth's width (0.3 to 1.4 ES) whose
+    ends lie symmetrically about the mid line (within 15 % of its width)."""
+    lo = np.array([-0.75, stomion[1] - 0.2, stomion[2] - 0.6])
+    hi = np.array([0.75, stomion[1] + 0.2])
+    D = _depth_map(Vt, T, lo, hi)
+    F = np.where(np.isnan(D), -np.inf, D)
+    i0 = int((0.0 - lo[0]) / DEPTH_CELL)
+    j0 = int((stomion[1] - lo[1]) / DEPTH_CELL)
+    sides = {}
+    for name, step in (("left", 1), ("right", -1)):
+        g = _groove(F, i0, j0, step)
+        if not g:
+            return {}
+        sides[name] = g
+    width = (sides["left"][-1][0] - sides["right"][-1][0]) * DEPTH_CELL
+    skew = (sides["left"][-1][0] + sides["right"][-1][0] - 2 * i0) * DEPTH_CELL
+    if not 0.3 <= width <= 1.4 or abs(skew) > 0.15 * width:
+        return {}
+    cx = lambda i: lo[0] + (i + 0.5) * DEPTH_CELL
+    cy = lambda j: lo[1] + (j + 0.5) * DEPTH_CELL
+
+    def at(i, j, dj=0):
+        # the surface point at cell (i, j): its depth, or the first filled cell in dj
+        while not np.isfinite(F[i, j]) and dj and 0 <= j + dj < F.shape[1]:
+            j += dj
+        return np.array([cx(i), cy(j), F[i, j]]) if np.isfinite(F[i, j]) else None
+
+    out = {}
+    for name, (outer, inner, up, dn) in (("left", ("8.3", "2.4", "2.6", "2.8")),
+                                         ("right", ("8.4", "2.5", "2.7", "2.9"))):
+        g = sides[name]
+        ie, je = g[-1]
+        p = at(ie, je)
+        if p is not None:
+            out[outer] = p
+        open_cells = [k for k, (i, j) in enumerate(g) if not np.isfinite(F[i, j])]
+        # an opening: empty cells past half the groove (a slit between the lips' sheets
+        # near the middle is no open mouth)
+        if open_cells and open_cells[-1] > 0.5 * len(g):
+            k = open_cells[-1]
+        else:
+            k = int(np.argmin([abs(abs(cx(i)) - INNER_CORNER * abs(cx(ie))) for i, _ in g]))
+        ic, jc = g[k]
+        p = at(ic, jc, 1) if not np.isfinite(F[ic, jc]) else at(ic, jc)
+        if p is not None:
+            out[inner] = p
+        # half way along the groove (arc length, in 3D) to the inner corner
+        pts = [at(i, j, 1) for i, j in g[:k + 1]]
+        ok = [q is not None for q in pts]
+        Q = np.array([q for q in pts if q is not None])
+        if len(Q) < 2:
+            continue
+        arc = np.r_[0, np.cumsum(np.linalg.norm(np.diff(Q, axis=0), axis=1))]
+        h = int(np.flatnonzero(ok)[np.argmin(np.abs(arc - 0.5 * arc[-1]))])
+        ih, jh = g[h]
+        pu, pd = at(ih, jh, 1), at(ih, jh, -1)
+        if pu is not None and pd is not None:
+            out[up], out[dn] = pu, pd
+    return out
+
+
 #: Each eye's lid-margin points: outer corner, inner corner, upper and lower lid middles.
 _EYE_KEYS = {"left eye": ("3.7", "3.11", "3.1", "3.3"), "right eye": ("3.12", "3.8", "3.2", "3.4")}
 
@@ -937,6 +1041,8 @@ def find_feature_points(face: FaceModel, *, ids: Optional[Iterable[str]] = None)
     # target's, held at them
     prof_pts = _profile_points(_profile(Vt, ST, 0.6, -2.5), 0.0)
     eye_pts = _eye_points(Vt, ST, tpl)
+    if "2.2" in prof_pts:
+        eye_pts.update(_mouth_points(Vt, ST, 0.5 * (prof_pts["2.2"] + prof_pts["2.3"])))
     X = _register(tpl, Vt, ST, {**prof_pts, **eye_pts})
     reasons: dict = {}
     pos: dict = {}       # id -> template-frame position on the target
@@ -1012,8 +1118,10 @@ def _register(tpl: _Template, Vt: np.ndarray, ST: np.ndarray,
     profile = profile or {}
     tip = tpl.skin_index["9.3"]
     for k, p in profile.items():
-        ref = tpl.profile.get(k, tpl.eyes.get(k))
-        if ref is not None and k != "2.3":
+        # the template's point read by the same rule, else its own (the mouth's corners:
+        # the reference head's lips barely crease where they meet)
+        ref = tpl.profile.get(k, tpl.eyes.get(k, tpl.points.get(k)))
+        if ref is not None and k not in ("2.3", "2.8", "2.9"):
             src.append(int(np.argmin(np.linalg.norm(tpl.V - ref, axis=1))))
             dst.append(p)
     if not src:
@@ -1021,8 +1129,8 @@ def _register(tpl: _Template, Vt: np.ndarray, ST: np.ndarray,
     n_mid = len(src)
     edge = _boundary_vertices(ST, len(Vt))
     for name, (c, lm) in tpl.openings.items():
-        if name != "mouth" and any(k in profile for k in _EYE_KEYS[name]):
-            continue                 # the eye's lid margins are held already
+        if any(k in profile for k in _EYE_KEYS.get(name, ("8.3", "8.4"))):
+            continue                 # the eye's lid margins (mouth's corners) held already
         got = _opening_landmarks(Vt, edge, c, _opening_boxes(tpl.points)[name][1])
         if got is None:
             continue

@@ -236,11 +236,14 @@ def run_case(det: Detector, ident: Identity, variant: int) -> tuple:
     head = FeaturePointSet({k: pl.undo(P[k]) for k in P}, P.vertices)
     res["found"] = list(head)
     # against the landmark truth
-    err = {}
+    err, vec = {}, {}
     for fp in LANDMARK_IDS:
         if fp in head:
-            err[fp] = float(np.linalg.norm(head[fp] - ident.landmarks[fp]) / ident.es * 100)
+            d = (head[fp] - ident.landmarks[fp]) / ident.es * 100
+            err[fp] = float(np.linalg.norm(d))
+            vec[fp] = [round(float(x), 3) for x in d]
     res["errors"] = err
+    res["error_vectors"] = vec          # found - truth, head frame (x left, y up, z forward), % ES0
     res["landmark_missing"] = [fp for fp in LANDMARK_IDS if fp not in head]
     res["plausibility"] = plausibility(ident, truth, head, eyes)
     return res, head
@@ -392,6 +395,15 @@ def report_points(cases: list) -> dict:
         wg = max(r, key=lambda g: max(r[g]) if r[g] else -1)
         print(f"| {name} | {n} | {fmt(m)} | {fmt(p)} | {fmt(x)} | {wg} ({fmt(max(r[wg]) if r[wg] else None)}) |")
         summary["slices"][name] = {"heads": n, "median": m, "p95": p, "max": x}
+
+    print("\n### Per group and slice: median / max (% of ES0)\n")
+    print("| slice | " + " | ".join(GROUPS) + " |")
+    print("|---|" + "---:|" * len(GROUPS))
+    for name, keep in slices:
+        r = point_rows(cases, keep)
+        cells = [f"{fmt(stats(r[g])[0])} / {fmt(stats(r[g])[2])}" for g in GROUPS]
+        print(f"| {name} | " + " | ".join(cells) + " |")
+        summary["slices"][name]["groups"] = {g: stats(r[g]) for g in GROUPS}
 
     print("\n### Per point (% of ES0)\n")
     print("| point | rule | median | p95 | max | missing |")

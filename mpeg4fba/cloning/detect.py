@@ -4,7 +4,8 @@
 Route (each step a function below):
 
 1. **Pieces** (:func:`_pieces`): every mesh cut into connected components; the skin is the
-   largest component, the others are candidate parts (eyeballs, teeth, tongue, lashes...).
+   component of the largest area, the others are candidate parts (eyeballs, teeth,
+   tongue, lashes...).
 2. **Head frame** (:func:`_head_frame`): the reference head's skin
    (:func:`mpeg4fba.models.reference_head`, the template, which carries all 84 points) is
    fitted to the target's skin by a trimmed, two-way similarity ICP (rotation, translation,
@@ -464,6 +465,19 @@ def _profile_points(prof: _Profile, eye_y: float) -> dict:
     if fold > lo + 4:
         i8 = lo + 2 + int(np.argmin(d2[lo + 2:fold - 1]))
         out["8.2"] = np.array([0.0, yy[i8], zz[i8]])
+    # 2.1 (menton; the module docstring's convention): from under the chin (where the
+    # profile has fallen 0.4 ES behind the chin's front, 0.25 ES or more below the lips'
+    # meeting) back up the chin's underside to where it turns 45 degrees from facing down
+    # to facing forward (the lower lip's underside can be as steep, so not walking down)
+    a0 = lo + int(0.25 / PROFILE_STEP)
+    if a0 < len(zz) - 2:
+        front = np.maximum.accumulate(zz[a0:])
+        under = np.flatnonzero(zz[a0:] < front - 0.4)
+        if len(under):
+            m = a0 + int(under[0])
+            while m - 1 > a0 and (zz[m - 2] - zz[m]) / (2 * PROFILE_STEP) >= 1.0:
+                m -= 1
+            out["2.1"] = np.array([0.0, yy[m], zz[m]])
     # subnasale: furthest behind the chord tip -> upper lip
     a, b = np.array([yy[tip], zz[tip]]), np.array([yy[ul], zz[ul]])
     d = b - a
@@ -519,6 +533,111 @@ def _depth_map(Vt: np.ndarray, T: np.ndarray, lo: np.ndarray, hi: np.ndarray,
     return out
 
 
+# -- points no geometry marks: placed by proportion from the crisp ones ---------------------------
+#: Points without a geometric mark on a mesh (the brows are hair, drawn on a texture; the
+#: chin's corners and the outer lips' intermediate points are points *along* a contour),
+#: placed by the proportions of the Multi-PIE / iBUG 68-landmark convention (the one
+#: ICT-FaceKit's landmarks and users' face trackers follow) relative to the crisp points
+#: found, then dropped along z onto the skin's front.  Each entry:
+#: ``id -> (frame, a, b)``; the frames (:func:`_convention_points`):
+#:
+#: - ``eye``: origin the eye's centre (the mean of its corners and lid middles), ``a``
+#:   along the line from the other eye's centre (outward), ``b`` square to it (up), in
+#:   units of half the outer canthi's distance (3.7-3.12: a long base, so a corner's
+#:   error hardly turns or scales it);
+#: - ``chin``: ``x = x(2.1) + a (x(corner) - x(2.1))``, ``y`` likewise with ``b``, the
+#:   corner the mouth's outer corner (8.3/8.4) of that side;
+#: - ``lip``: ``x = x(mid) + a (x(corner) - x(mid))``, ``y = y(corner) + b (y(mid) -
+#:   y(corner))``, mid 8.1 (upper) or 8.2 (lower), corner 8.3/8.4;
+#: - ``nose``: ``x = a`` half the outer canthi's distance (3.7-3.12) to that side,
+#:   ``y = y(9.15) + b`` that distance.
+#:
+#: The proportions are the means over 20 random ICT-FaceKit identities (seeds 101-120 of
+#: ``benchmarks/ict.py``'s identity draw, none of them used to judge the detector); in
+#: brackets the standard deviation of ``a`` and ``b`` over them.  The brows [0.02-0.04
+#: half canthal widths: 1-2.5 % ES] vary most: where a person's eyebrows are is not in
+#: the mesh.
+CONVENTION = {
+    "4.1": ("eye", -0.464, 0.562),     # inner brow end       [0.017, 0.030]
+    "4.3": ("eye", 0.126, 0.640),      # brow's top           [0.025, 0.031]
+    "4.5": ("eye", 0.577, 0.393),      # outer brow end       [0.029, 0.036]
+    "2.11": ("chin", 0.596, 0.075),    # chin corner          [0.033, 0.011]
+    "8.5": ("lip", 0.618, 0.776),      # upper lip, half way  [0.017, 0.049]
+    "8.10": ("lip", 0.288, 1.069),     # Cupid's bow peak     [0.012, 0.027]
+    "8.7": ("lip", 0.589, 0.766),      # lower lip, half way  [0.020, 0.061]
+    "9.5": ("nose", 0.276, 0.009),     # nostril base's end   [0.016, 0.005]
+}
+#: The mirror partners (the face's right side) of :data:`CONVENTION`.
+_CONVENTION_RIGHT = {"4.2": "4.1", "4.4": "4.3", "4.6": "4.5", "2.12": "2.11", "8.6": "8.5",
+                     "8.9": "8.10", "8.8": "8.7", "9.4": "9.5"}
+
+
+def _front_at(Vt: np.ndarray, T: np.ndarray, xy: np.ndarray) -> np.ndarray:
+    """(k,) the most forward z of the skin over each point ``xy`` (k, 2) (template frame),
+    NaN where no triangle is over it."""
+    P = Vt[T]
+    out = np.full(len(xy), np.nan)
+    lo, hi = P[:, :, :2].min(1), P[:, :, :2].max(1)
+    for n, q in enumerate(xy):
+        m = np.flatnonzero(np.all((lo <= q) & (hi >= q), axis=1))
+        if not len(m):
+            continue
+        a, b, c = P[m, 0], P[m, 1], P[m, 2]
+        v0, v1, v2 = b[:, :2] - a[:, :2], c[:, :2] - a[:, :2], q - a[:, :2]
+        den = v0[:, 0] * v1[:, 1] - v1[:, 0] * v0[:, 1]
+        ok = np.abs(den) > 1e-15
+        den = np.where(ok, den, 1.0)
+        u = (v2[:, 0] * v1[:, 1] - v1[:, 0] * v2[:, 1]) / den
+        v = (v0[:, 0] * v2[:, 1] - v2[:, 0] * v0[:, 1]) / den
+        inside = ok & (u >= -1e-9) & (v >= -1e-9) & (u + v <= 1 + 1e-9)
+        if inside.any():
+            z = (a[:, 2] + u * (b[:, 2] - a[:, 2]) + v * (c[:, 2] - a[:, 2]))[inside]
+            out[n] = z.max()
+    return out
+
+
+def _convention_points(Vt: np.ndarray, T: np.ndarray, pos: dict, crisp: set) -> dict:
+    """The :data:`CONVENTION` points (and their mirror partners) from the crisp points in
+    ``pos`` (template frame; only those in ``crisp`` are used), on the skin's front."""
+    want = {**{k: (k, 1.0) for k in CONVENTION}, **{k: (m, -1.0) for k, m in _CONVENTION_RIGHT.items()}}
+    corner = {1.0: "8.3", -1.0: "8.4"}
+    xy = {}
+    for k, (rule, side) in want.items():
+        frame, a, b = CONVENTION[rule]
+        if frame == "eye":
+            if not all(e in crisp for e in _EYE_KEYS["left eye"] + _EYE_KEYS["right eye"]):
+                continue
+            cl = np.mean([pos[e] for e in _EYE_KEYS["left eye"]], axis=0)[:2]
+            cr = np.mean([pos[e] for e in _EYE_KEYS["right eye"]], axis=0)[:2]
+            u = (cl - cr) / np.linalg.norm(cl - cr)
+            n = np.array([-u[1], u[0]])                  # up
+            unit = 0.5 * np.linalg.norm((pos["3.7"] - pos["3.12"])[:2])
+            c = cl if side > 0 else cr
+            xy[k] = c + unit * (side * a * u + b * n)
+        elif frame == "chin":
+            c = corner[side]
+            if "2.1" not in crisp or c not in crisp:
+                continue
+            xy[k] = pos["2.1"][:2] + np.array([a, b]) * (pos[c][:2] - pos["2.1"][:2])
+        elif frame == "lip":
+            mid = "8.1" if rule in ("8.5", "8.10") else "8.2"
+            c = corner[side]
+            if mid not in crisp or c not in crisp:
+                continue
+            xy[k] = np.array([pos[mid][0] + a * (pos[c][0] - pos[mid][0]),
+                              pos[c][1] + b * (pos[mid][1] - pos[c][1])])
+        elif frame == "nose":
+            if not {"3.7", "3.12", "9.15"} <= crisp:
+                continue
+            half = 0.5 * abs(pos["3.7"][0] - pos["3.12"][0])
+            xy[k] = np.array([side * a * half, pos["9.15"][1] + b * 2 * half])
+    if not xy:
+        return {}
+    keys = list(xy)
+    z = _front_at(Vt, T, np.array([xy[k] for k in keys]))
+    return {k: np.array([*xy[k], zk]) for k, zk in zip(keys, z) if np.isfinite(zk)}
+
+
 #: Where Multi-PIE's inner lip corners (landmarks 60/64, MPEG-4 2.4/2.5) lie on a closed
 #: mouth, as a fraction of the way from the mid line to the commissure along the lips'
 #: contact groove: 0.875 (the inner corners sit an eighth of the mouth's half width
@@ -529,13 +648,15 @@ INNER_CORNER = 0.875
 
 
 def _groove(D: np.ndarray, i: int, j: int, step: int, reach: int = 3,
-            depth: float = 0.01) -> list:
+            depth: float = 0.01, slack: int = 3) -> list:
     """The cells (i, j) of the groove of the depth map ``D`` (front-view z, -inf where
     empty) followed from (i, j) along x (``step`` = +-1): at each column the deepest cell
     within two cells of the last one's height (an empty cell is deepest: an opening),
     while it lies ``depth`` (0.01 ES, 0.6 mm) or more behind the mean of the cells
-    ``reach`` rows above and below it (a groove, not the smooth skin beyond its end)."""
-    out = []
+    ``reach`` rows above and below it (a groove, not the smooth skin beyond its end).
+    Up to ``slack`` weaker columns in a row are crossed (a decimated mesh's facets make a
+    shallow groove flicker); the groove ends at its last strong cell."""
+    out, weak = [], []
     ny = D.shape[1]
     for _ in range(D.shape[0]):
         i += step
@@ -548,8 +669,13 @@ def _groove(D: np.ndarray, i: int, j: int, step: int, reach: int = 3,
         z, up, dn = D[i, jb], D[i, jb + reach], D[i, jb - reach]
         if np.isfinite(z) and (not (np.isfinite(up) and np.isfinite(dn))
                                or 0.5 * (up + dn) - z < depth):
-            break
-        out.append((i, jb))
+            weak.append((i, jb))
+            if len(weak) > slack:
+                break
+        else:
+            out.extend(weak)
+            weak = []
+            out.append((i, jb))
         j = jb
     return out
 
@@ -645,10 +771,12 @@ def _groove_end(D: np.ndarray, i: int, j: int, step: int, reach: int = 3,
     the opening's extreme cell (i, j) outward along x (``step`` = +-1): at each column the
     deepest cell within two cells of the last one's height, kept while it lies ``depth``
     (0.01 ES, 0.6 mm) or more behind the mean of the cells ``reach`` rows above and below
-    it (a groove, not the smooth skin beyond the corner); the last groove cell, or None."""
+    it (a groove, not the smooth skin beyond the corner), for 0.07 ES at most (a
+    caruncle's pocket reaches 0.04-0.06 ES; on a coarse mesh the side of the nose can
+    look like a groove going on); the last groove cell, or None."""
     last = None
     ny = D.shape[1]
-    for _ in range(int(0.15 / DEPTH_CELL)):
+    for _ in range(int(0.07 / DEPTH_CELL)):
         i += step
         if not 0 <= i < D.shape[0]:
             break
@@ -781,9 +909,10 @@ def _pieces(face: FaceModel) -> _Pieces:
                                 "feature points on")
     V, T = np.vstack(verts), np.vstack(tris)
     comp = np.concatenate(comp)
-    # the skin: the component with the most triangles (the head is the biggest piece)
-    tri_count = np.bincount(comp[T[:, 0]], minlength=ncomp)
-    skin = int(np.argmax(tri_count))
+    # the skin: the component with the largest area (the head is the biggest piece; by
+    # triangle count a decimated skin can lose to a finely meshed mouth interior)
+    area = 0.5 * np.linalg.norm(np.cross(V[T[:, 1]] - V[T[:, 0]], V[T[:, 2]] - V[T[:, 0]]), axis=1)
+    skin = int(np.argmax(np.bincount(comp[T[:, 0]], weights=area, minlength=ncomp)))
     return _Pieces(V, T, np.concatenate(mesh_of), np.concatenate(local), comp, names, skin)
 
 
@@ -1071,8 +1200,16 @@ def find_feature_points(face: FaceModel, *, ids: Optional[Iterable[str]] = None)
         near = cKDTree(Vt).query(on)[1]
         for k, p, v in zip(eye_pts, on, near):
             pos[k], tie[k] = p, skin_ids[v]
-    crisp_ok = (_refine(Vt, ST, pos, tie, skin_ids, reasons, "9.3" in prof_pts)
+    crisp_ok = (_refine(Vt, ST, pos, tie, skin_ids, reasons, "9.3" in prof_pts,
+                        "2.1" in prof_pts)
                 | set(prof_pts) | set(eye_pts))
+    # from the crisp points, or where the registration put them when the geometry had
+    # no mark (a mouth without a groove keeps the template's corners)
+    conv = _convention_points(Vt, ST, pos, set(pos))
+    if conv:
+        near = cKDTree(Vt).query(np.array(list(conv.values())))[1]
+        for (k, p), v in zip(conv.items(), near):
+            pos[k], tie[k] = p, skin_ids[v]
     # 7.1 and other off-surface points: moved with the registration's displacement nearby
     for k, p in tpl.points.items():
         if k in pos or k in _PART_OF:
@@ -1148,7 +1285,8 @@ def _register(tpl: _Template, Vt: np.ndarray, ST: np.ndarray,
     return register_surface(tpl.V, tpl.T, start, src, Vt, ST)
 
 
-def _refine(Vt, ST, pos, tie, skin_ids, reasons, prof_has_tip: bool = False) -> set:
+def _refine(Vt, ST, pos, tie, skin_ids, reasons, prof_has_tip: bool = False,
+            prof_has_chin: bool = False) -> set:
     """Move the crisp points onto the crisp geometry near them (template frame); the ids
     moved.  Nose tip 9.3: the most forward vertex within 0.25 ES of where the registration
     put it; chin 2.1: the menton rule (module docstring) on the target's skin."""
@@ -1158,7 +1296,7 @@ def _refine(Vt, ST, pos, tie, skin_ids, reasons, prof_has_tip: bool = False) -> 
         v = near[np.argmax(Vt[near, 2])]
         pos["9.3"], tie["9.3"] = Vt[v], skin_ids[v]
         done.add("9.3")
-    if "8.2" in pos:
+    if "8.2" in pos and not prof_has_chin:
         m = _menton(Vt, ST, {"8.2": pos["8.2"], "2.1": pos["2.1"]})
         if np.linalg.norm(m - pos["2.1"]) < 0.5:
             v = int(np.argmin(np.linalg.norm(Vt - m, axis=1)))

@@ -64,6 +64,7 @@ from __future__ import annotations
 import argparse
 import contextlib
 import json
+import os
 import platform
 import subprocess
 import sys
@@ -211,7 +212,7 @@ def run_case(det: Detector, ident: Identity, variant: int) -> tuple:
            "skin_vertices": int(len(world.meshes["Skin"].vertices)),
            "up": pl.up, "facing": pl.facing, "tilt": pl.tilt, "scale": pl.scale,
            "placement": pl.label}
-    t0 = time.perf_counter()
+    t0, c0 = time.perf_counter(), time.process_time()
     try:
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always")
@@ -225,6 +226,7 @@ def run_case(det: Detector, ident: Identity, variant: int) -> tuple:
         res["raised"] = f"{type(e).__name__}: {e}"
         return res, None
     res["time"] = time.perf_counter() - t0
+    res["cpu"] = time.process_time() - c0
     res["warnings"] = sorted({str(w.message) for w in caught})
     conf = dict(getattr(found, "confidence", {}) or {})
     res["missing"] = list(getattr(found, "missing", []) or [])
@@ -493,16 +495,23 @@ def report_time(cases: list) -> dict:
     full = [c for c in cases if c["mesh"] == "full" and "time" in c]
     dec = [c for c in cases if c["mesh"] == "decimated" and "time" in c]
     print("\n### Time of find_feature_points (s)\n")
-    print("| heads | vertices (median) | median | worst |\n|---|---:|---:|---:|")
+    print("| heads | vertices (median) | wall median | wall worst | CPU median | CPU worst |")
+    print("|---|---:|---:|---:|---:|---:|")
     out = {}
     for name, cs in (("full", full), ("decimated", dec)):
         if not cs:
             continue
         t = [c["time"] for c in cs]
+        u = [c.get("cpu", float("nan")) for c in cs]
         nv = int(np.median([c["vertices"] for c in cs]))
-        print(f"| {name} ({len(cs)}) | {nv:,} | {np.median(t):.2f} | {max(t):.2f} |")
-        out[name] = {"median": float(np.median(t)), "worst": float(max(t)), "vertices": nv}
-    print("\nGoal: <= 3 s on a 30,000-vertex head.")
+        print(f"| {name} ({len(cs)}) | {nv:,} | {np.median(t):.2f} | {max(t):.2f} | "
+              f"{np.median(u):.2f} | {max(u):.2f} |")
+        out[name] = {"median": float(np.median(t)), "worst": float(max(t)), "vertices": nv,
+                     "cpu_median": float(np.median(u)), "cpu_worst": float(max(u))}
+    print("\nGoal: <= 3 s on a 30,000-vertex head.  Timed after one untimed warm-up call (the "
+          "first call of a process also builds the detector's template); CPU is the process's "
+          "CPU time (all its threads); the machine is shared, so wall time includes waiting "
+          f"(load average {os.getloadavg()[0]:.1f} at the end of the run).")
     return out
 
 
@@ -633,6 +642,16 @@ def main(argv=None) -> int:
     print(f"commit {git_commit()}, python {platform.python_version()}, case seeds {seeds}")
 
     source = ict.ict_face(data, ict.identity(data, SOURCE_SEED), name=f"ICT-{SOURCE_SEED}")
+    if det.real:                   # warm-up, untimed: the first call builds the template
+        t0 = time.perf_counter()
+        try:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                det.find(ict.placed_face(source, None, name="warm-up"))
+        except Exception as e:                                   # noqa: BLE001
+            print(f"warm-up on {source.name} raised {type(e).__name__}: {e}")
+        print(f"warm-up call (template built): {time.perf_counter() - t0:.2f} s; "
+              f"load average {os.getloadavg()[0]:.1f}")
     cases, pairs, noise_rows = [], [], []
     for i, seed in enumerate(seeds):
         ident = draw_identity(data, i, seed)

@@ -377,7 +377,7 @@ def _farthest(yy: np.ndarray, zz: np.ndarray, i: int, j: int) -> int:
     return i + int(np.argmax((seg - a) @ n))
 
 
-def _profile_points(prof: _Profile, eye_y: float) -> dict:
+def _profile_points(prof: _Profile, eye_y: float, lips_ok=None) -> dict:
     """Mid-line points read off the profile (template frame), walking down from the eye
     line ``eye_y``: {"9.3", "9.15", "8.1", "2.2", "2.3", "8.2"} where found.
 
@@ -408,6 +408,8 @@ def _profile_points(prof: _Profile, eye_y: float) -> dict:
     out = {}
     peaks, _ = find_peaks(zz, prominence=0.005)
     peaks = peaks[peaks >= start]
+    # the upper lip's front can be all but flat (a philtrum hardly hollow): any bump
+    lip_peaks, _ = find_peaks(zz, prominence=0.0005)
     tip = None
     for p in peaks:
         after = zz[p:]
@@ -422,8 +424,8 @@ def _profile_points(prof: _Profile, eye_y: float) -> dict:
     fallen = np.flatnonzero(zz[tip:] < zz[tip] - 0.15)
     if not len(fallen):
         return out
-    below = peaks[peaks > tip + fallen[0]]
-    if len(below) < 2:
+    below = lip_peaks[lip_peaks > tip + fallen[0]]
+    if not len(below):
         return out
     ul = below[0]
     out["8.1"] = np.array([0.0, yy[ul], zz[ul]])
@@ -456,14 +458,33 @@ def _profile_points(prof: _Profile, eye_y: float) -> dict:
         peaks_c, _ = find_peaks(c)
         firsts = [p for p in peaks_c if p in set(strong.tolist())]
         up = lo = ul + (firsts[0] if firsts else int(np.argmax(c)))
+    if lips_ok is not None:
+        # an upper lip that does not bulge gives no bump: its first bump was then the
+        # lower lip's, and the lips' contact lies above it: a crease between 0.3 ES below
+        # the tip (the tip to the stomion is 0.4 ES or more: nose below the tip, then
+        # philtrum; a philtrum's crease lies higher) and that bump from which a groove
+        # runs the mouth's width
+        f = tip + int(fallen[0])
+        a0 = tip + int(0.3 / PROFILE_STEP)
+        if ul > a0 + 2:
+            pk, _ = find_peaks(d2[a0:ul])
+            for p in pk:
+                if d2[a0 + p] > 0 and lips_ok(np.array([0.0, yy[a0 + p], zz[a0 + p]])):
+                    up = lo = a0 + p
+                    ul = _farthest(yy, zz, f, up)
+                    out["8.1"] = np.array([0.0, yy[ul], zz[ul]])
+                    break
     out["2.2"] = np.array([0.0, yy[up], rz[up] if np.isfinite(rz[up]) else zz[up]])
     out["2.3"] = np.array([0.0, yy[lo], rz[lo] if np.isfinite(rz[lo]) else zz[lo]])
-    # 8.2: the lower lip's rim, the most convex point between the lips' meeting and the
-    # labiomental fold (the deepest point within 0.4 ES below it)
-    end = min(lo + int(0.4 / PROFILE_STEP), len(zz) - 1)
-    fold = lo + int(np.argmin(zz[lo:end + 1]))
-    if fold > lo + 4:
-        i8 = lo + 2 + int(np.argmin(d2[lo + 2:fold - 1]))
+    # 8.2: the lower lip's rim, the most convex point between the lower lip's front and
+    # the labiomental fold (the deepest point within 0.35 ES below it)
+    # (from the lower lip's front, the most forward point within 0.2 ES below the lips'
+    # meeting: the smoothed profile just below a parting still dips into the gap)
+    ll = lo + int(np.argmax(zz[lo:min(lo + int(0.2 / PROFILE_STEP), len(zz) - 1) + 1]))
+    end = min(ll + int(0.35 / PROFILE_STEP), len(zz) - 1)
+    fold = ll + int(np.argmin(zz[ll:end + 1]))
+    if fold > ll + 2:
+        i8 = ll + int(np.argmin(d2[ll:fold]))
         out["8.2"] = np.array([0.0, yy[i8], zz[i8]])
     # 2.1 (menton; the module docstring's convention): from under the chin (where the
     # profile has fallen 0.4 ES behind the chin's front, 0.25 ES or more below the lips'
@@ -643,7 +664,8 @@ def _convention_points(Vt: np.ndarray, T: np.ndarray, pos: dict, crisp: set) -> 
 #: contact groove: 0.875 (the inner corners sit an eighth of the mouth's half width
 #: inside the commissures: 0.86-0.89 on ICT-FaceKit identities, measured on the mean
 #: face and four random identities; a closed mouth's contact line has no geometric mark
-#: there).  An open mouth's inner corners are its opening's lateral ends instead.
+#: there, and a slit between the lips seen from the front ends anywhere from a third to
+#: two thirds of the way out, so it marks nothing either).
 INNER_CORNER = 0.875
 
 
@@ -684,11 +706,10 @@ def _mouth_points(Vt: np.ndarray, T: np.ndarray, stomion: np.ndarray) -> dict:
     """The mouth's corners from the lips' contact groove seen from the front (template
     frame): the groove (:func:`_groove`) of the skin's depth map followed from the
     stomion (the profile's lips' meeting) to each side; its ends are the commissures
-    (8.3, 8.4: the outer corners); the inner corners (2.4, 2.5) are the opening's
-    lateral ends when the groove runs through an opening seen from the front, else the
-    groove's points :data:`INNER_CORNER` of the way out; 2.6-2.9 (the inner lips'
+    (8.3, 8.4: the outer corners); the inner corners (2.4, 2.5) are the groove's points
+    :data:`INNER_CORNER` of the way out; 2.6-2.9 (the inner lips'
     midpoints) on the groove half way to the inner corners (its edges above and below
-    when it is open there).  {} without a groove a mouth's width (0.3 to 1.4 ES) whose
+    when it is open there).  {} without a groove a mouth's width (0.45 to 1.4 ES) whose
     ends lie symmetrically about the mid line (within 15 % of its width)."""
     lo = np.array([-0.75, stomion[1] - 0.2, stomion[2] - 0.6])
     hi = np.array([0.75, stomion[1] + 0.2])
@@ -704,7 +725,7 @@ def _mouth_points(Vt: np.ndarray, T: np.ndarray, stomion: np.ndarray) -> dict:
         sides[name] = g
     width = (sides["left"][-1][0] - sides["right"][-1][0]) * DEPTH_CELL
     skew = (sides["left"][-1][0] + sides["right"][-1][0] - 2 * i0) * DEPTH_CELL
-    if not 0.3 <= width <= 1.4 or abs(skew) > 0.15 * width:
+    if not 0.45 <= width <= 1.4 or abs(skew) > 0.15 * width:
         return {}
     cx = lambda i: lo[0] + (i + 0.5) * DEPTH_CELL
     cy = lambda j: lo[1] + (j + 0.5) * DEPTH_CELL
@@ -723,13 +744,10 @@ def _mouth_points(Vt: np.ndarray, T: np.ndarray, stomion: np.ndarray) -> dict:
         p = at(ie, je)
         if p is not None:
             out[outer] = p
-        open_cells = [k for k, (i, j) in enumerate(g) if not np.isfinite(F[i, j])]
-        # an opening: empty cells past half the groove (a slit between the lips' sheets
-        # near the middle is no open mouth)
-        if open_cells and open_cells[-1] > 0.5 * len(g):
-            k = open_cells[-1]
-        else:
-            k = int(np.argmin([abs(abs(cx(i)) - INNER_CORNER * abs(cx(ie))) for i, _ in g]))
+        # (not the end of an opening seen from the front: lips modelled as two sheets
+        # leave a slit a third to two thirds of the way out, and ICT's inner corners stay
+        # 0.045-0.055 ES inside the commissures whether or not it is there)
+        k = int(np.argmin([abs(abs(cx(i)) - INNER_CORNER * abs(cx(ie))) for i, _ in g]))
         ic, jc = g[k]
         p = at(ic, jc, 1) if not np.isfinite(F[ic, jc]) else at(ic, jc)
         if p is not None:
@@ -1168,7 +1186,8 @@ def find_feature_points(face: FaceModel, *, ids: Optional[Iterable[str]] = None)
     Vt = s * SV @ R.T + t
     # the mid-line profile's points (nose, lips), then the template's skin bent onto the
     # target's, held at them
-    prof_pts = _profile_points(_profile(Vt, ST, 0.6, -2.5), 0.0)
+    prof_pts = _profile_points(_profile(Vt, ST, 0.6, -2.5), 0.0,
+                               lambda p: bool(_mouth_points(Vt, ST, p)))
     eye_pts = _eye_points(Vt, ST, tpl)
     if "2.2" in prof_pts:
         eye_pts.update(_mouth_points(Vt, ST, 0.5 * (prof_pts["2.2"] + prof_pts["2.3"])))

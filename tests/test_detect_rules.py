@@ -1,0 +1,194 @@
+"""The geometric rules of :mod:`mpeg4fba.cloning.detect` on small synthetic meshes whose
+answers are known by construction: the mid-plane cut and profile (nose tip, lips, menton),
+the mid plane, the eye opening seen from the front, the lips' groove, the points placed by
+the landmark convention's proportions.  Units are the template's (eye separations, ES)."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from mpeg4fba.cloning import detect as D
+
+
+def _grid(x: np.ndarray, y: np.ndarray, z) -> tuple:
+    """A triangulated height field z(x, y) over the grid ``x`` by ``y``: (V, T)."""
+    X, Y = np.meshgrid(x, y, indexing="ij")
+    V = np.c_[X.ravel(), Y.ravel(), z(X, Y).ravel()]
+    nx, ny = len(x), len(y)
+    i, j = np.meshgrid(np.arange(nx - 1), np.arange(ny - 1), indexing="ij")
+    a = (i * ny + j).ravel()
+    b, c, d = a + ny, a + 1, a + ny + 1
+    T = np.r_[np.c_[a, b, d], np.c_[a, d, c]]
+    return V, T
+
+
+def _bump(y, c, h, w):
+    return h * np.exp(-0.5 * ((y - c) / w) ** 2)
+
+
+def _face_profile(y, lip=0.10):
+    """A face's mid-line profile z(y) (template frame): nose tip at y = -0.55, upper lip's
+    front at -0.95 (height ``lip``), lips meeting at -1.05, lower lip at -1.15, chin at
+    -1.5, its underside turning 45 degrees at about -1.66."""
+    z = 1.0 + _bump(y, -0.55, 0.5, 0.1)
+    z = z + _bump(y, -0.95, lip, 0.05) + _bump(y, -1.15, 0.08, 0.05)
+    z = z + _bump(y, -1.5, 0.06, 0.12)
+    z = z - 1.0 / (1.0 + np.exp((y + 1.70) / 0.03))        # under the chin
+    return z
+
+
+def _face(lip=0.10, resolution=0.01):
+    """:func:`_face_profile` on the mid line, its features narrowing away from it."""
+    x = np.arange(-1.0, 1.0 + 1e-9, 0.05)
+    y = np.arange(-2.4, 0.6 + 1e-9, resolution)
+
+    def z(X, Y):
+        relief = _face_profile(Y, lip) - _face_profile(Y, 0.0) * 0 - 1.0
+        return 1.0 + relief * np.exp(-0.5 * (X / 0.25) ** 2) - 0.3 * X ** 2
+    return _grid(x, y, z)
+
+
+def _menton_y(lip=0.10) -> float:
+    """Where the profile's fall (-dz/dy) first reaches 1 going up from under the chin."""
+    y = np.arange(-1.9, -1.45, 1e-4)
+    fall = np.gradient(_face_profile(y, lip), y)        # z falls as y falls: dz/dy > 0
+    under = np.flatnonzero(fall >= 1.0)
+    return float(y[under[-1]])
+
+
+def test_plane_cut_lies_on_the_plane_and_counts_mid_line_vertices():
+    V, T = _grid(np.linspace(-1, 1, 9), np.linspace(0, 1, 5), lambda X, Y: X * 0 + Y)
+    for x0 in (0.3, 0.0):                     # 0.0: a column of vertices on the plane
+        A, B = D._plane_cut(V, T, x0)
+        assert len(A) > 0
+        assert np.allclose(A[:, 0], x0) and np.allclose(B[:, 0], x0)
+        # the cut covers the mesh's whole height
+        ys = np.r_[A[:, 1], B[:, 1]]
+        assert ys.min() == pytest.approx(0.0) and ys.max() == pytest.approx(1.0)
+
+
+def test_profile_points_of_a_synthetic_face():
+    V, T = _face()
+    prof = D._profile(V, T, 0.6, -2.4)
+    pts = D._profile_points(prof, 0.0)
+    y = {k: p[1] for k, p in pts.items()}
+    assert y["9.3"] == pytest.approx(-0.55, abs=0.04)
+    assert -1.0 < y["8.1"] < -0.9
+    assert y["2.2"] == y["2.3"] and -1.1 < y["2.2"] < -1.0          # lips closed
+    assert -1.3 < y["8.2"] < y["2.3"]                              # below the meeting
+    assert y["8.1"] < y["9.15"] < y["9.3"]                         # between nose and lip
+    assert y["2.1"] == pytest.approx(_menton_y(), abs=0.03)          # the 45-degree turn
+    # every point lies on the profile's front
+    for k, p in pts.items():
+        assert p[2] == pytest.approx(_face_profile(p[1]), abs=0.02), k
+
+
+def test_mid_plane_search_keeps_the_frame_of_a_face_too_flat_across():
+    # a ridge with no relief across: any plane square to x fits as well; the search
+    # must not run away
+    V, T = _grid(np.arange(-1, 1, 0.05), np.arange(-2, 0.6, 0.02),
+                 lambda X, Y: _face_profile(Y) + 0 * X)
+    A, b = D._mid_plane(V, T)
+    assert np.degrees(np.arccos(np.clip(A[0, 0], -1, 1))) < 10.5
+
+
+def test_an_upper_lip_as_forward_as_the_nose_is_not_the_nose_tip():
+    # the lip stands within 0.05 ES of the tip's height: the tip is still the first
+    # peak below the eye line that falls like a nose
+    V, T = _face(lip=0.45)
+    pts = D._profile_points(D._profile(V, T, 0.6, -2.4), 0.0)
+    assert pts["9.3"][1] == pytest.approx(-0.55, abs=0.04)
+    assert -1.0 < pts["8.1"][1] < -0.9
+
+
+def test_parted_lips_give_two_inner_lip_points_either_side_of_the_gap():
+    V, T = _face(resolution=0.005)
+    # cut the lips apart: drop the triangles between y = -1.07 and -1.03 (a slit), and
+    # let what shows through it lie deep inside (a mouth socket's back)
+    c = V[T].mean(1)
+    slit = (c[:, 1] > -1.07) & (c[:, 1] < -1.03)
+    T = T[~slit]
+    x = np.arange(-1.0, 1.0 + 1e-9, 0.05)
+    Vb, Tb = _grid(x, np.arange(-1.2, -0.9, 0.01), lambda X, Y: X * 0 + 0.3)
+    V2, T2 = np.vstack([V, Vb]), np.vstack([T, Tb + len(V)])
+    pts = D._profile_points(D._profile(V2, T2, 0.6, -2.4), 0.0)
+    assert pts["2.2"][1] > pts["2.3"][1]
+    assert -1.04 < pts["2.2"][1] < -1.0 and -1.11 < pts["2.3"][1] < -1.06
+
+
+def test_mid_plane_found_for_a_turned_shifted_symmetric_face():
+    V, T = _face(resolution=0.02)
+    turn = D._turn(np.array([0.0, 1.0, 0.0]), np.radians(4.0))
+    W = V @ turn.T + [0.04, 0.0, 0.0]
+    A, b = D._mid_plane(W, T)
+    back = W @ A.T + b
+    # the nose tip, off the plane by 0.04 + 2 * sin(4 deg) before, is on it after
+    tip = back[np.argmax(back[:, 2])]
+    assert abs(tip[0]) < 0.01
+
+
+def test_eye_opening_seen_from_the_front():
+    # a flat skin (z = 1) with an elliptical hole: half width 0.17, half height 0.06
+    V, T = _grid(np.arange(-0.2, 1.2, 0.01), np.arange(-0.5, 0.5, 0.01), lambda X, Y: X * 0 + 1.0)
+    c = V[T].mean(1)
+    hole = ((c[:, 0] - 0.5) / 0.17) ** 2 + (c[:, 1] / 0.06) ** 2 < 1.0
+    T = T[~hole]
+    got = D._eye_opening(V, T, np.array([0.5, 0.0, 1.0]), left=True)
+    assert set(got) == {"out", "in", "top", "bottom"}
+    assert got["out"][0] == pytest.approx(0.67, abs=0.02)
+    assert got["in"][0] == pytest.approx(0.33, abs=0.02)
+    assert got["top"][1] == pytest.approx(0.06, abs=0.02)
+    assert got["bottom"][1] == pytest.approx(-0.06, abs=0.02)
+    assert all(p[2] == pytest.approx(1.0) for p in got.values())
+    # the right eye's corners the other way round
+    got = D._eye_opening(V, T, np.array([0.5, 0.0, 1.0]), left=False)
+    assert got["out"][0] < got["in"][0]
+    # no opening: nothing
+    V2, T2 = _grid(np.arange(-0.2, 1.2, 0.02), np.arange(-0.5, 0.5, 0.02), lambda X, Y: X * 0)
+    assert D._eye_opening(V2, T2, np.array([0.5, 0.0, 0.0]), left=True) == {}
+
+
+def test_lips_groove_ends_at_the_commissures():
+    # a face front (z = 1 - 0.3 x^2) with a groove 0.03 ES deep along y = -1.05 for
+    # |x| < 0.35, fading over 0.02 ES beyond
+    def z(X, Y):
+        depth = 0.03 * np.clip((0.37 - np.abs(X)) / 0.02, 0, 1)
+        return 1.0 - 0.3 * X ** 2 - depth * np.exp(-0.5 * ((Y + 1.05) / 0.015) ** 2)
+    V, T = _grid(np.arange(-0.8, 0.8 + 1e-9, 0.01), np.arange(-1.3, -0.8, 0.005), z)
+    got = D._mouth_points(V, T, np.array([0.0, -1.05, 1.0]))
+    assert got["8.3"][0] == pytest.approx(0.36, abs=0.02)
+    assert got["8.4"][0] == pytest.approx(-0.36, abs=0.02)
+    assert got["2.4"][0] == pytest.approx(D.INNER_CORNER * got["8.3"][0], abs=0.015)
+    assert 0.0 < got["2.6"][0] < got["2.4"][0]
+    # no groove: no mouth
+    V2, T2 = _grid(np.arange(-0.8, 0.8, 0.02), np.arange(-1.3, -0.8, 0.01),
+                   lambda X, Y: 1.0 - 0.3 * X ** 2)
+    assert D._mouth_points(V2, T2, np.array([0.0, -1.05, 1.0])) == {}
+
+
+def test_convention_points_follow_their_proportions_on_a_flat_face():
+    V, T = _grid(np.arange(-1.5, 1.5, 0.05), np.arange(-2.0, 1.0, 0.05), lambda X, Y: X * 0 + 1.0)
+    pos = {"3.7": [0.7, 0, 1], "3.11": [0.3, 0, 1], "3.1": [0.5, 0.08, 1], "3.3": [0.5, -0.08, 1],
+           "3.12": [-0.7, 0, 1], "3.8": [-0.3, 0, 1], "3.2": [-0.5, 0.08, 1],
+           "3.4": [-0.5, -0.08, 1], "2.1": [0, -1.7, 1], "8.3": [0.35, -1.05, 1],
+           "8.4": [-0.35, -1.05, 1], "8.1": [0, -0.95, 1], "8.2": [0, -1.2, 1],
+           "9.15": [0, -0.75, 1]}
+    pos = {k: np.array(v, dtype=float) for k, v in pos.items()}
+    got = D._convention_points(V, T, pos, set(pos))
+    assert set(got) == set(D.CONVENTION) | set(D._CONVENTION_RIGHT)
+    _, a, b = D.CONVENTION["2.11"]
+    assert got["2.11"][:2] == pytest.approx([a * 0.35, -1.7 + b * 0.65])
+    _, a, b = D.CONVENTION["4.5"]                     # eye centre (0.5, 0), unit 0.7
+    assert got["4.5"][:2] == pytest.approx([0.5 + a * 0.7, b * 0.7])
+    # left and right mirror each other, and all lie on the skin
+    for k, m in D._CONVENTION_RIGHT.items():
+        assert got[k] == pytest.approx(got[m] * [-1, 1, 1])
+    assert all(p[2] == pytest.approx(1.0) for p in got.values())
+
+
+def test_front_at_takes_the_most_forward_layer():
+    V1, T1 = _grid(np.linspace(0, 1, 5), np.linspace(0, 1, 5), lambda X, Y: X * 0 + 0.2)
+    V2, T2 = _grid(np.linspace(0, 1, 5), np.linspace(0, 1, 5), lambda X, Y: 0.5 + 0.1 * X)
+    V, T = np.vstack([V1, V2]), np.vstack([T1, T2 + len(V1)])
+    z = D._front_at(V, T, np.array([[0.5, 0.5], [2.0, 2.0]]))
+    assert z[0] == pytest.approx(0.55) and np.isnan(z[1])

@@ -223,6 +223,7 @@ def run_case(det: Detector, ident: Identity, variant: int) -> tuple:
                 found = StandInFound(given, {k: 1.0 for k in given})
     except Exception as e:                                       # noqa: BLE001 (counted)
         res["time"] = time.perf_counter() - t0
+        res["cpu"] = time.process_time() - c0
         res["raised"] = f"{type(e).__name__}: {e}"
         return res, None
     res["time"] = time.perf_counter() - t0
@@ -502,7 +503,7 @@ def report_time(cases: list) -> dict:
         if not cs:
             continue
         t = [c["time"] for c in cs]
-        u = [c.get("cpu", float("nan")) for c in cs]
+        u = [c["cpu"] for c in cs if "cpu" in c]
         nv = int(np.median([c["vertices"] for c in cs]))
         print(f"| {name} ({len(cs)}) | {nv:,} | {np.median(t):.2f} | {max(t):.2f} | "
               f"{np.median(u):.2f} | {max(u):.2f} |")

@@ -72,7 +72,6 @@ import time
 import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Optional
 
 import numpy as np
 
@@ -86,7 +85,6 @@ from benchmarks.ict_pick_points import MIDLINE, PAIRS  # noqa: E402
 from mpeg4fba.cloning import FacialMotionCloner  # noqa: E402
 from mpeg4fba.cloning.surface import closest_points  # noqa: E402
 from mpeg4fba.fba.featurepoints import FeaturePointSet, point_order  # noqa: E402
-from mpeg4fba.fba.requirements import NOT_SURFACE  # noqa: E402
 
 #: The fixed regression draw: one case seed per identity (identity weights, decimation
 #: fraction and the four placements all follow from it).  Chosen once, never tuned.

@@ -1,0 +1,294 @@
+"""Automatic feature points on ICT-FaceKit heads (the cases behind
+``benchmarks/bench_find_points.py``), and the landmark -> feature point table they are
+measured against.
+
+Needs ``../shared/data/ict-facekit`` (skips without it), read in place.  The detector
+tests also need ``mpeg4fba.cloning.detect`` (branch i18-detect) and skip without it.
+Bounds are in % of the eye distance ES0, measured in the head's own frame.
+"""
+from __future__ import annotations
+
+import re
+import warnings
+
+import numpy as np
+import pytest
+
+from benchmarks import ict
+from benchmarks.ict_pick_points import PAIRS
+from mpeg4fba.fba.tables import FEATURE_POINTS
+
+
+@pytest.fixture(scope="module")
+def data(ict_data):
+    return ict_data
+
+
+# -- the landmark table ---------------------------------------------------------------------------
+def spec_side(fp: str) -> str:
+    """"left", "right" or "mid" from the standard's description of ``fp`` (the face's
+    own left): the side of the eye, lid or brow named, else of the end of a midpoint
+    that is off the midline, else the first left/right word."""
+    desc = FEATURE_POINTS[fp].description
+    m = re.search(r"\b(left|right) (eye|eyebrow|eyelid)\b", desc)
+    if m:
+        return m.group(1)
+    m = re.search(r"midpoint between (\d+\.\d+) and (\d+\.\d+)", desc)
+    if m:
+        sides = {spec_side(m.group(1)), spec_side(m.group(2))} - {"mid"}
+        return sides.pop() if len(sides) == 1 else "mid"
+    m = re.search(r"\b(left|right)\b", desc)
+    return m.group(1) if m else "mid"
+
+
+def test_spec_side_reads_the_descriptions():
+    assert [spec_side(k) for k in ("3.8", "3.12", "4.1", "2.6", "8.5", "8.9", "3.1", "9.15")] == \
+        ["right", "right", "left", "left", "left", "right", "left", "mid"]
+
+
+def test_every_table_point_is_on_the_side_the_standard_says(data):
+    """The face's own left is +x (ICT: +z toward the viewer); the generic head is
+    symmetric, so a midline point is at x = 0."""
+    pts = ict.landmark_points(data)
+    es = float(np.linalg.norm(data.neutral[21458] - data.neutral[23028]))   # the pupils
+    for fp, p in pts.items():
+        side = spec_side(fp)
+        if side == "left":
+            assert p[0] > 0.01 * es, (fp, FEATURE_POINTS[fp].description, p)
+        elif side == "right":
+            assert p[0] < -0.01 * es, (fp, FEATURE_POINTS[fp].description, p)
+        else:
+            assert abs(p[0]) < 0.01 * es, (fp, FEATURE_POINTS[fp].description, p)
+
+
+def test_table_points_lie_near_our_picked_points(data):
+    """Each landmark point against our picked point (spec_fixtures/ict/feature_points.json)
+    on the generic head, within LANDMARK_PICKED_TOLERANCE (cm): 0 where the picked point
+    is the landmark; 1.0 to 3.2 mm where the rules differ (9.3: landmark 30 is 3 mm above
+    the front-most vertex; lids: the lid landmarks' midpoint, not the pupil's slab)."""
+    pts = ict.landmark_points(data)
+    picked = ict.feature_point_ids()
+    assert set(pts) == set(ict.LANDMARK_POINTS) <= set(picked)
+    for fp, p in pts.items():
+        d = float(np.linalg.norm(p - data.neutral[picked[fp]]))
+        assert d <= ict.LANDMARK_PICKED_TOLERANCE[fp], (fp, d)
+
+
+def test_table_points_mirror_in_pairs(data):
+    pts = ict.landmark_points(data)
+    for left, right in PAIRS:
+        if left in pts and right in pts:
+            assert np.allclose(pts[left], pts[right] * [-1, 1, 1], atol=0.005), (left, right)
+
+
+def test_table_lip_and_lid_points_lie_on_the_right_sheet(data):
+    """Upper-lip points barely move under jawOpen, lower-lip ones go down with the jaw;
+    upper-lid points close under eyeBlink, lower-lid ones don't (the closed lips and the
+    lids touch: a point between two landmarks could land on the other sheet)."""
+    from mpeg4fba.cloning.surface import closest_points
+    V = data.neutral
+    lay = ict.mesh_layout(data)
+    tris = lay.ids["Skin"][lay.triangles["Skin"]]
+    pts = ict.landmark_points(data)
+    ids = list(pts)
+    t, b, d = closest_points(np.array([pts[k] for k in ids]), V, tris, k=16)
+    assert d.max() < 1e-6                         # on the surface
+    jaw = np.einsum("ij,ijc->ic", b, data.expressions["jawOpen"][tris[t]])[:, 1]
+    blink_l = np.einsum("ij,ijc->ic", b, data.expressions["eyeBlink_L"][tris[t]])[:, 1]
+    blink_r = np.einsum("ij,ijc->ic", b, data.expressions["eyeBlink_R"][tris[t]])[:, 1]
+    move = dict(zip(ids, zip(jaw, blink_l, blink_r)))
+    for fp in ("2.2", "2.6", "2.7", "8.1", "8.5", "8.6", "8.9", "8.10"):
+        assert move[fp][0] > -1.0, (fp, move[fp])
+    for fp in ("2.3", "2.8", "2.9", "8.2", "8.7", "8.8"):
+        assert move[fp][0] < -2.0, (fp, move[fp])
+    assert move["3.1"][1] < -0.5 and move["3.2"][2] < -0.5
+    assert move["3.3"][1] > -0.2 and move["3.4"][2] > -0.2
+
+
+def test_landmark_truth_is_the_table_where_it_defines_a_point(data):
+    V = ict.identity(data, 5)
+    given = ict.landmark_truth(data, V)
+    pts = ict.landmark_points(data, V)
+    picked = ict.feature_point_ids()
+    for fp in given:
+        want = pts[fp] if fp in pts else (V[picked[fp]] if fp in picked else None)
+        if want is not None:
+            assert np.allclose(given[fp], want), fp
+    assert "7.1" in given and not given.vertices
+
+
+# -- placements -----------------------------------------------------------------------------
+def test_placements_are_supported_and_undone():
+    rng = np.random.default_rng(3)
+    P = np.random.default_rng(4).normal(size=(5, 3))
+    for _ in range(50):
+        pl = ict.random_placement(rng)
+        R = pl.rotation
+        assert np.allclose(R @ R.T, np.eye(3)) and np.isclose(np.linalg.det(R), 1.0)
+        assert np.allclose(pl.undo(pl.apply(P)), P)
+        up = np.degrees(np.arccos(np.clip(R[:, 1] @ ict._axis(pl.up), -1, 1)))
+        fwd = np.degrees(np.arccos(np.clip(R[:, 2] @ ict._axis(pl.facing), -1, 1)))
+        assert up <= ict.MAX_TILT + 1e-9 and fwd <= ict.MAX_TILT + 1e-9
+        assert pl.scale in ict.SCALES
+
+
+def test_placed_face_is_a_dumb_mesh(data):
+    face = ict.ict_face(data)
+    pl = ict.Placement("+Z", "-Y", 12.0, (0.0, 0.6, 0.8), 10.0, (1.0, 2.0, 3.0))
+    out = ict.placed_face(face, pl, eyes=False)
+    assert not len(out.points) and not out.regions and not len(out.fat.tables)
+    assert set(out.meshes) == set(face.meshes) - set(ict.EYEBALLS)
+    assert np.allclose(pl.undo(out.meshes["Skin"].vertices), face.meshes["Skin"].vertices)
+
+
+# -- the detector on ICT heads ---------------------------------------------------------------------
+#: (identity seed, variant (mesh, eyes), placement): three identities of the regression
+#: draw, each full and decimated, with and without eyeballs, upright and lying, three
+#: scales, tilted 0 to 20 degrees.
+CASES = [
+    (7301, ("full", True), ict.Placement("+Y", "+Z", 0.0, (1.0, 0.0, 0.0), 1.0, (0.0, 0.0, 0.0))),
+    (7301, ("decimated", False), ict.Placement("+Z", "-X", 17.0, (0.6, 0.0, 0.8), 10.0, (50.0, -80.0, 20.0))),
+    (7302, ("full", False), ict.Placement("+Z", "+Y", 9.0, (0.0, 0.8, 0.6), 0.1, (1.0, 1.0, -2.0))),
+    (7302, ("decimated", True), ict.Placement("+Y", "-X", 20.0, (0.0, 0.0, 1.0), 10.0, (0.0, 30.0, 0.0))),
+    (7303, ("full", True), ict.Placement("+Z", "-Y", 5.0, (0.0, 1.0, 0.0), 1.0, (-4.0, 2.0, 9.0))),
+    (7303, ("decimated", False), ict.Placement("+Y", "+X", 14.0, (0.8, 0.6, 0.0), 0.1, (0.5, 0.0, 0.0))),
+]
+_FRACTION = 0.3
+
+
+@pytest.fixture(scope="module")
+def detect():
+    return pytest.importorskip("mpeg4fba.cloning.detect",
+                               reason="mpeg4fba.cloning.detect (branch i18-detect) is not merged")
+
+
+@pytest.fixture(scope="module")
+def found(data, detect):
+    """Per case: (identity vertices, truth face, eyes, found points in the head frame or
+    the exception, landmark errors % ES0)."""
+    out = []
+    for seed, (mesh, eyes), pl in CASES:
+        V = ict.identity(data, seed)
+        truth = (ict.ict_face(data, V) if mesh == "full"
+                 else ict.ict_face_decimated(data, V, _FRACTION, keep_ids=data.landmarks))
+        world = ict.placed_face(truth, pl, eyes=eyes)
+        try:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                res = detect.find_feature_points(world)
+        except Exception as e:                               # noqa: BLE001 (asserted below)
+            out.append((V, truth, eyes, e, {}))
+            continue
+        from mpeg4fba.fba.featurepoints import FeaturePointSet
+        head = FeaturePointSet({k: pl.undo(res.points[k]) for k in res.points}, res.points.vertices)
+        lm = ict.landmark_points(data, V)
+        es = float(np.linalg.norm(truth.points["3.5"] - truth.points["3.6"]))
+        err = {k: float(np.linalg.norm(head[k] - lm[k]) / es * 100) for k in lm if k in head}
+        out.append((V, truth, eyes, head, err))
+    return out
+
+
+def test_every_head_gets_its_landmark_points(found):
+    for (seed, variant, pl), (_, _, _, head, err) in zip(CASES, found):
+        assert not isinstance(head, Exception), (seed, variant, pl.label, head)
+        missing = sorted(set(ict.LANDMARK_POINTS) - set(err))
+        assert not missing, (seed, variant, pl.label, missing)
+
+
+def _all_errors(found) -> np.ndarray:
+    return np.array([e for *_, err in found for e in err.values()])
+
+
+def _worst(found) -> tuple:
+    return max((v, k, CASES[i][0], CASES[i][1]) for i, (*_, err) in enumerate(found)
+               for k, v in err.items())
+
+
+#: Issue 18's goals for the found points against the landmark points (% ES0) and for
+#: cloning with them against cloning with the landmark points (ratio, mean and max).
+GOAL = {"median": 1.5, "p95": 4.0, "max": 8.0, "clone_mean": 1.25, "clone_max": 1.25}
+#: What the detector meets today on CASES (measured, rounded up; detect 55b1494: median
+#: 2.2, p95 6.0, max 14.8 % ES0, clone ratio 2.2 mean, 0.77 max; one head's ratio swings
+#: (1.05, 1.9, 1.8, 1.1, 0.77 over five detect commits): the benchmark's distribution is
+#: the measure): a regression fails the plain tests; the goal tests are strict xfails
+#: while a goal is not met, so they XPASS (and fail) once it is: then move MEETS.
+MEETS = {"median": 2.75, "p95": 7.0, "max": 16.0, "clone_mean": 2.75, "clone_max": 1.25}
+_NOT_YET = "the detector does not meet issue 18's goal yet (MEETS is what it meets)"
+
+
+def _goal_params(keys):
+    return [pytest.param(k, marks=pytest.mark.xfail(strict=True, reason=_NOT_YET))
+            if MEETS[k] > GOAL[k] else k for k in keys]
+
+
+def _stat(found, stat: str) -> float:
+    e = _all_errors(found)
+    return float({"median": np.median, "p95": lambda x: np.percentile(x, 95),
+                  "max": np.max}[stat](e))
+
+
+@pytest.mark.parametrize("stat", ["median", "p95", "max"])
+def test_found_points_within_what_the_detector_meets(found, stat):
+    assert _stat(found, stat) <= MEETS[stat], _worst(found)
+
+
+@pytest.mark.parametrize("stat", _goal_params(["median", "p95", "max"]))
+def test_found_points_within_the_goal(found, stat):
+    """Issue 18: median <= 1.5 %, p95 <= 4 %, none over 8 % ES0."""
+    assert _stat(found, stat) <= GOAL[stat], _worst(found)
+
+
+@pytest.fixture(scope="module")
+def cloned(data, found):
+    """CASES[3] (ICT-7302, decimated, with eyeballs, lying, x10), cloned from ICT-1 in
+    the head frame (eight expressions, scaling off) with the found points and with the
+    landmark points: (auto, landmark) results of bench_find_points.clone_error."""
+    from benchmarks.bench_find_points import SOURCE_SEED, clone_error
+    V, truth, eyes, head, _ = found[3]
+    assert not isinstance(head, Exception), head
+    source = ict.ict_face(data, ict.identity(data, SOURCE_SEED))
+    return (clone_error(data, source, truth, head, eyes),
+            clone_error(data, source, truth, ict.landmark_truth(data, V), eyes))
+
+
+def _ratio(cloned, which: str) -> float:
+    auto, given = cloned
+    assert "raised" not in auto and "raised" not in given, (auto, given)
+    key = which.split("_")[1]
+    return auto[key] / given[key]
+
+
+@pytest.mark.parametrize("which", ["clone_mean", "clone_max"])
+def test_cloning_with_found_points_within_what_the_detector_meets(cloned, which):
+    assert _ratio(cloned, which) <= MEETS[which], cloned
+
+
+@pytest.mark.parametrize("which", _goal_params(["clone_mean", "clone_max"]))
+def test_cloning_with_found_points_within_the_goal(cloned, which):
+    """Issue 18: cloning with found points within 1.25x of cloning with landmark points."""
+    assert _ratio(cloned, which) <= GOAL[which], cloned
+
+
+def test_a_head_without_eyeballs_says_where_its_pupils_are_or_that_they_are_missing(data, detect):
+    V = ict.identity(data, 7303)
+    world = ict.placed_face(ict.ict_face(data, V), CASES[2][2], eyes=False)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        res = detect.find_feature_points(world)
+    for fp in ("3.5", "3.6"):
+        assert fp in res.points or (fp in res.missing and fp in res.reasons), fp
+
+
+def test_the_benchmark_measures_given_points_as_exact(data):
+    """The harness's own zero check: a stand-in "detector" that gives back the landmark
+    points (placed like the head) scores 0 on every landmark point, on every surface, on
+    the right side, for a head lying on its back at scale 10 without eyeballs."""
+    from benchmarks import bench_find_points as bench
+    det = bench.Detector("stand-in", None, lambda f, p, ids=(): (p, {}), (), False)
+    ident = bench.draw_identity(data, 0, bench.REGRESSION_SEEDS[0])
+    ident.placements[3] = CASES[1][2]
+    res, head = bench.run_case(det, ident, 3)
+    assert "raised" not in res and not res["landmark_missing"]
+    assert max(res["errors"].values()) < 1e-9
+    checks = res["plausibility"]["points"].values()
+    assert all(r["on_surface"] and r["in_box"] and r.get("side_ok", True) for r in checks)

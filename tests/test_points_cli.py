@@ -90,6 +90,13 @@ def test_points_edit_writes_the_review_page(files, found_run):
     assert r.exit_code == 0, r.output
     page = (files / "review.html").read_text()
     assert "3.5" in page and "8.4" in page and "<script" in page
+    # the file's confidences are shown, and the page opens on the face (frame of the points)
+    from mpeg4fba.render.point_editor import editor_data
+    data = editor_data(page)
+    conf = read_confidences(files / "head.json")
+    assert {row["id"]: row["confidence"] for row in data["points"]} == conf
+    assert np.allclose(data["view"]["up"], [0, 1, 0], atol=0.2)      # the mouth stands forward of the eyes: about 10 degrees
+    assert np.allclose(data["view"]["forward"], [0, 0, 1], atol=0.2)
 
 
 def test_points_snap_moves_noisy_crisp_points_back(files, found_run, head):

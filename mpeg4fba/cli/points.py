@@ -33,7 +33,7 @@ import click
 from . import main, warnings_to_stderr
 from .common import check_output
 
-__all__ = ["points_command", "describe_found"]
+__all__ = ["points_command", "describe_found", "frame_of_points"]
 
 
 def _ids(ids) -> str:
@@ -112,7 +112,10 @@ def _points(head: str, output: str, edit: bool, given: Optional[str], snap: bool
     reasons: dict = {}
     if given:
         points = face.points
-        confidence = {}
+        if given.lower().endswith(".json"):
+            from ..formats.fpjson import read_confidences
+            confidence = {k: c for k, c in read_confidences(given).items() if k in points}
+        up, forward = frame_of_points(points)
         if snap:
             points, moved = snap_points(face, points)
             far = max(moved.items(), key=lambda kv: kv[1], default=None)
@@ -145,6 +148,35 @@ def _points(head: str, output: str, edit: bool, given: Optional[str], snap: bool
             render_points(shown, shown_points, preview, confidences=confidence or None)
             written.append(preview)
     click.echo(f"wrote {', '.join(written)}")
+
+
+def frame_of_points(points) -> tuple:
+    """(up, forward) of a head from its points (the face's left from the right pupil to the
+    left one, up from the mouth to the eyes, forward their cross product), or (None,
+    None) without the pupils or a point of the mouth.  Good for a view, not a measure:
+    the mouth stands forward of the eyes, so up leans back about 10 degrees.
+
+    >>> from mpeg4fba.fba.featurepoints import FeaturePointSet
+    >>> up, fwd = frame_of_points(FeaturePointSet({"3.5": (0, 3, 1), "3.6": (0, 3, -1), "8.1": (0, 0, 0)}))
+    >>> up.tolist(), fwd.tolist()      # its left is +z: it faces -x
+    ([0.0, 1.0, 0.0], [-1.0, 0.0, 0.0])
+    """
+    import numpy as np
+
+    mouth = [points[k] for k in ("2.2", "2.3", "8.1", "8.2", "8.3", "8.4") if k in points]
+    if "3.5" not in points or "3.6" not in points or not mouth:
+        return None, None
+    left = points["3.5"] - points["3.6"]
+    up = (points["3.5"] + points["3.6"]) / 2 - np.mean(mouth, axis=0)
+    n = np.linalg.norm(left)
+    if n == 0:
+        return None, None
+    left = left / n
+    up = up - np.dot(up, left) * left
+    if np.linalg.norm(up) < 1e-12:
+        return None, None
+    up = up / np.linalg.norm(up)
+    return up, np.cross(left, up)
 
 
 def _upright(face, points, up, forward) -> tuple:

@@ -181,3 +181,55 @@ def test_the_picture_shows_a_z_up_head_upright(head):
     shown, shown_pts = _upright(turned, pts, up=R @ [0, 1, 0], forward=R @ [0, 0, 1])
     assert np.allclose(shown.world_vertices("Skin"), head.world_vertices("Skin"))
     assert np.allclose(shown_pts["9.3"], head.points["9.3"])
+
+
+def _skinned(path_in, path_out) -> None:
+    """A copy of a .glb whose mesh nodes are skinned to one joint (JOINTS_0, WEIGHTS_0,
+    an identity inverse bind matrix), as heads from character tools come."""
+    import pygltflib
+
+    g = pygltflib.GLTF2().load(str(path_in))
+    blob = bytearray(g.binary_blob())
+
+    def add(array: np.ndarray, component: int, kind: str) -> int:
+        while len(blob) % 4:
+            blob.append(0)
+        g.bufferViews.append(pygltflib.BufferView(buffer=0, byteOffset=len(blob), byteLength=array.nbytes))
+        blob.extend(array.tobytes())
+        g.accessors.append(pygltflib.Accessor(bufferView=len(g.bufferViews) - 1, componentType=component,
+                                              count=len(array), type=kind))
+        return len(g.accessors) - 1
+
+    g.nodes.append(pygltflib.Node(name="root_joint"))
+    g.scenes[g.scene or 0].nodes.append(len(g.nodes) - 1)
+    g.skins.append(pygltflib.Skin(joints=[len(g.nodes) - 1],
+                                  inverseBindMatrices=add(np.eye(4, dtype=np.float32)[None], 5126, "MAT4")))
+    for node in g.nodes:
+        if node.mesh is None:
+            continue
+        node.skin = 0
+        for prim in g.meshes[node.mesh].primitives:
+            n = g.accessors[prim.attributes.POSITION].count
+            prim.attributes.JOINTS_0 = add(np.zeros((n, 4), np.uint8), 5121, "VEC4")
+            prim.attributes.WEIGHTS_0 = add(np.tile(np.float32([1, 0, 0, 0]), (n, 1)), 5126, "VEC4")
+    g.buffers[0].byteLength = len(blob)
+    g.set_binary_blob(bytes(blob))
+    g.save(str(path_out))
+
+
+def test_points_and_clone_on_a_skinned_glb_of_several_primitives(files, head):
+    """A glTF head of nine primitives (skin, hair, eyes, teeth, tongue, ...) skinned to a
+    joint, no points: found, and cloned."""
+    from mpeg4fba.formats.wrl_face import save_face
+    from mpeg4fba.fba.face import FaceModel
+
+    plain = FaceModel(head.meshes.values(), head.transforms.values(), name="head")
+    save_face(plain, files / "plain.glb")
+    _skinned(files / "plain.glb", files / "skinned.glb")
+    r = CliRunner().invoke(main, ["points", str(files / "skinned.glb"), "-o", str(files / "skinned.json")])
+    assert r.exit_code == 0, r.output
+    pts, _ = read_feature_points_json(files / "skinned.json")
+    assert {"3.5", "3.6", "9.10", "6.1"} <= set(pts)             # pupils on eyeballs, teeth, tongue
+    r = CliRunner().invoke(main, ["clone", str(files / "skinned.glb"), "-o", str(files / "skinned_anim.glb")])
+    assert r.exit_code == 0, r.output
+    assert "no feature points given" in r.output and "check: 0 errors" in r.output

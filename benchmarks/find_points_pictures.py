@@ -51,7 +51,6 @@ def heads() -> list:
 def main(argv=None) -> int:
     from mpeg4fba.cli.points import _upright
     from mpeg4fba.cloning import find_feature_points
-    from mpeg4fba.fba.featurepoints import FeaturePointSet
     from mpeg4fba.render.preview import save_png
     from mpeg4fba.render.points import points_image
 
@@ -65,7 +64,7 @@ def main(argv=None) -> int:
     tiles = []
     for caption, face in cases:
         found = find_feature_points(face)
-        pts = FeaturePointSet({k: found.points[k] for k in found.points})
+        pts = found.points.positions_only()
         shown, shown_pts = _upright(face, pts, found.up, found.forward)
         tiles.append(points_image(shown, shown_pts, confidences=found.confidence, size=SIZE,
                                   views=("front",)))

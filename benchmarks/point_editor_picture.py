@@ -14,8 +14,6 @@ import sys
 import tempfile
 from pathlib import Path
 
-import numpy as np
-
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
@@ -41,14 +39,13 @@ def example():
 
 def main(argv=None) -> int:
     from mpeg4fba.render.point_editor import write_point_editor
-    from mpeg4fba.fba import FeaturePointSet
     from mpeg4fba.render.points import render_points
 
     argv = sys.argv[1:] if argv is None else argv
     out = Path(argv[0]) if argv else ROOT / "docs" / "images"
     out.mkdir(parents=True, exist_ok=True)
     face, found = example()
-    points = FeaturePointSet({k: found.points[k] for k in found.points})
+    points = found.points.positions_only()
     conf = found.confidence
     render_points(face, points, out / "point_editor_points.png", confidences=conf)
     print(f"wrote {out / 'point_editor_points.png'}")

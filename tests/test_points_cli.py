@@ -6,7 +6,6 @@ The true points are the reference head's own; the heads and their files are made
 """
 from __future__ import annotations
 
-import json
 
 import numpy as np
 import pytest

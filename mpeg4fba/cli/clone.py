@@ -50,7 +50,8 @@ def _say_points(report, target: str, where: str) -> None:
     """One line per thing done to the target's points (none when they were all given)."""
     import os
 
-    for k, d in sorted(report.snapped.items(), key=lambda kv: -kv[1])[:1]:
+    if report.snapped:
+        k, d = max(report.snapped.items(), key=lambda kv: kv[1])
         click.echo(f"snapped {len(report.snapped)} crisp points onto the target's geometry "
                    f"(farthest {k}, moved {d:.3g} model units)")
     if report.added:
@@ -125,13 +126,10 @@ def clone_command(faces: tuple, output: str, source_points: Optional[str], targe
         from ..cloning.autopoints import complete_points
         state["points"] = complete_points(state["target"], snap=snap)
         if state["points"].added:
-            from ..fba.featurepoints import FeaturePointSet
             from ..formats.fpjson import write_feature_points_json
-            target = state["target"]
             conf = state["points"].found.confidence
-            write_feature_points_json(FeaturePointSet({k: target.points[k] for k in target.points}),
-                                      points_out, confidences={k: conf[k] for k in state["points"].added
-                                                               if k in conf})
+            write_feature_points_json(state["target"].points.positions_only(), points_out,
+                                      confidences={k: conf[k] for k in state["points"].added if k in conf})
 
     def mapping() -> None:
         source, target = state["source"], state["target"]

@@ -100,6 +100,7 @@ def points_command(head: str, output: Optional[str], edit: bool, given: Optional
 
 def _points(head: str, output: str, edit: bool, given: Optional[str], snap: bool,
             preview: Optional[str], lenient: bool) -> None:
+    from ..cloning.alignment import REQUIRED_POINTS
     from ..cloning.detect import find_feature_points, snap_points
     from ..fba.requirements import required_points
     from ..formats.face_files import read_face
@@ -121,7 +122,7 @@ def _points(head: str, output: str, edit: bool, given: Optional[str], snap: bool
             far = max(moved.items(), key=lambda kv: kv[1], default=None)
             click.echo(f"snapped {len(moved)} crisp points of {os.path.basename(given)} onto the "
                        f"geometry" + (f" (farthest {far[0]}, moved {far[1]:.3g} model units)" if far else ""))
-        wanted = required_points(base=_base_points())
+        wanted = required_points(base=REQUIRED_POINTS)
         missing = tuple(points.missing(wanted))
         reasons = {k: "not in the point file" for k in missing}
     else:
@@ -132,8 +133,7 @@ def _points(head: str, output: str, edit: bool, given: Optional[str], snap: bool
         up, forward = found.up, found.forward
     # positions are exact; a vertex ref only names the nearest vertex (a reader would
     # move the point onto it), so the sidecar keeps positions only
-    from ..fba.featurepoints import FeaturePointSet
-    plain = FeaturePointSet({k: points[k] for k in points})
+    plain = points.positions_only()
     written = [output]
     if edit:
         from ..render.point_editor import write_point_editor
@@ -200,8 +200,3 @@ def _upright(face, points, up, forward) -> tuple:
     M = np.eye(4)
     M[:3, :3] = R
     return turned, points.transformed(M)
-
-
-def _base_points() -> tuple:
-    from ..cloning.alignment import REQUIRED_POINTS
-    return tuple(REQUIRED_POINTS)

@@ -20,8 +20,6 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Iterable, Optional
 
-import numpy as np
-
 from ..fba.face import FaceModel
 from ..fba.featurepoints import FeaturePointSet, point_order
 from .alignment import REQUIRED_POINTS
@@ -58,28 +56,22 @@ def complete_points(face: FaceModel, *, required: Iterable[str] = REQUIRED_POINT
     :class:`~mpeg4fba.cloning.detect.FaceNotFoundError` when points are needed and the
     mesh does not look like a face."""
     given = face.points
-    snapped: dict = {}
-    if snap and len(given):
-        crisp = [k for k in CRISP_POINTS if k in given]
-        if crisp:
-            given, moved = snap_points(face, given, ids=crisp)
-            snapped = {k: float(d) for k, d in moved.items()}
     missing = given.missing(required)
-    if not missing:
-        face.points = given
-        return PointReport(kept=tuple(given), snapped=snapped)
-    found = find_feature_points(face)
+    crisp = [k for k in CRISP_POINTS if k in given] if snap else []
+    if not missing and not crisp:
+        return PointReport(kept=tuple(given))
+    found = find_feature_points(face)          # once, for the snapping and the filling
+    snapped: dict = {}
+    if crisp:
+        given, moved = snap_points(face, given, ids=crisp, found=found)
+        snapped = {k: float(d) for k, d in moved.items()}
     take = set(found.points) if not len(given) else set(missing) & set(found.points)
     positions = {k: given[k] for k in given}
-    vertices = {k: v for k, v in given.vertices.items() if k in positions}
-    for k in take:
-        positions[k] = np.asarray(found.points[k], float)
-        ref = found.points.vertex(k)
-        if ref is not None and k not in vertices:
-            vertices[k] = ref
-    # positions are exact; a vertex ref only names the nearest vertex, so it is kept
-    # out of the set (a reader would move the point onto that vertex)
-    face.points = FeaturePointSet(positions, {k: v for k, v in vertices.items()
-                                              if k in given.vertices})
+    positions.update({k: found.points[k] for k in take})
+    # the found points' vertex ties only name the nearest vertex (a reader would move the
+    # point onto it): they are left out, the given points keep theirs
+    face.points = FeaturePointSet(positions, {k: v for k, v in given.vertices.items() if k in positions})
+    if not take:
+        return PointReport(kept=tuple(given), snapped=snapped)
     return PointReport(kept=tuple(given), added=tuple(point_order(take)), snapped=snapped,
                        found=found)

@@ -89,7 +89,7 @@ from scipy.spatial import cKDTree
 
 from ..fba.face import FaceModel
 from ..fba.featurepoints import FeaturePointSet, normalise_id, point_order
-from ..fba.requirements import FAPU_POINTS, NOT_SURFACE, PART_POINTS, required_points
+from ..fba.requirements import FAPU_POINTS, PART_POINTS, required_points
 from .alignment import REQUIRED_POINTS
 from .parts import is_eyeball, mesh_components
 from .surface import (boundary_loops, closest_points, feature_warp, register_surface,
@@ -893,8 +893,6 @@ def _eye_opening(Vt: np.ndarray, T: np.ndarray, centre: np.ndarray, left: bool) 
     if best is None:
         return {}
     ii, jj = best
-    x = lo[0] + (ii + 0.5) * DEPTH_CELL
-    y = lo[1] + (jj + 0.5) * DEPTH_CELL
     filled = np.where(np.isnan(D), -np.inf, D)
 
     def front(i, j, di, dj):
@@ -1282,7 +1280,7 @@ def find_feature_points(face: FaceModel, *, ids: Optional[Iterable[str]] = None)
         _, nn = tpl_tree.query(p, k=8)
         pos[k] = p + (X[nn] - tpl.V[nn]).mean(0)
         resid[k] = float(near_d[nn].mean())
-    parts_found = _parts(pieces, s, R, t, X, tpl, pos, tie, reasons)
+    _parts(pieces, s, R, t, X, tpl, pos, tie, reasons)
     _pupils_in_openings(pos, resid, reasons)
     # results in model coordinates
     inv = lambda p: (np.asarray(p) - t) @ R / s
@@ -1329,7 +1327,6 @@ def _register(tpl: _Template, Vt: np.ndarray, ST: np.ndarray,
             dst.append(p)
     if not src:
         src, dst = [tip], [tpl.V[tip]]
-    n_mid = len(src)
     edge = _boundary_vertices(ST, len(Vt))
     for name, (c, lm) in tpl.openings.items():
         if any(k in profile for k in _EYE_KEYS.get(name, ("8.3", "8.4"))):
@@ -1396,15 +1393,12 @@ def _parts(pieces: _Pieces, s, R, t, X, tpl: _Template, pos, tie, reasons) -> se
     cent = {c: Vt[m].mean(0) for c, m in members.items()}
     ext = {c: float(np.ptp(Vt[m], axis=0).max()) for c, m in members.items()}
     T = pieces.T
-    closed = {}
-    tc = pieces.comp[T[:, 0]]
-    for c in others:
-        closed[int(c)] = False
     e = np.sort(np.concatenate([T[:, [0, 1]], T[:, [1, 2]], T[:, [2, 0]]]), axis=1)
     _, inv, cnt = np.unique(e, axis=0, return_inverse=True, return_counts=True)
     open_comp = np.unique(pieces.comp[e[cnt[inv.ravel()] == 1, 0]])
-    for c in others:
-        closed[int(c)] = int(c) not in set(open_comp.tolist())
+    # closed: no edge on the boundary (an eyeball is; a socket or an open shell is not)
+    open_set = set(open_comp.tolist())
+    closed = {int(c): int(c) not in open_set for c in others}
     used = set()
     # eyes
     for fp, name in (("3.5", "LeftEyeball"), ("3.6", "RightEyeball")):
@@ -1509,11 +1503,13 @@ def _confidence(pos, resid, crisp_ok, reasons) -> dict:
     return out
 
 
-def snap_points(face: FaceModel, points: FeaturePointSet, ids=CRISP_POINTS) -> tuple:
+def snap_points(face: FaceModel, points: FeaturePointSet, ids=CRISP_POINTS, *,
+                found: Optional[FoundPoints] = None) -> tuple:
     """(snapped FeaturePointSet, id -> distance moved in model units): the given crisp
     points among ``ids`` moved to the crisp geometry found near them (within a quarter of
-    the eye separation; further, the given point is kept: the user knows better)."""
-    found = find_feature_points(face)
+    the eye separation; further, the given point is kept: the user knows better).
+    ``found``: :func:`find_feature_points` of ``face`` when the caller has it already."""
+    found = find_feature_points(face) if found is None else found
     pos = {k: points[k] for k in points}
     ties = dict(points.vertices)
     es = None

@@ -153,6 +153,15 @@ class FeaturePointSet(Mapping):
             pos[k] = verts[index]
         return FeaturePointSet(pos, self._vert)
 
+    def positions_only(self) -> "FeaturePointSet":
+        """A copy with the positions and no vertex ties (for a sidecar whose positions
+        are exact: a reader moves a tied point onto its vertex).
+
+        >>> FeaturePointSet({"9.3": (0, 0, 1)}, {"9.3": ("Skin", 4)}).positions_only().vertices
+        {}
+        """
+        return FeaturePointSet(self._pos)
+
     def transformed(self, matrix: np.ndarray) -> "FeaturePointSet":
         """A copy with positions moved by a 4x4 matrix."""
         keys = list(self._pos)

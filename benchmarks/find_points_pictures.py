@@ -49,7 +49,7 @@ def heads() -> list:
 
 
 def main(argv=None) -> int:
-    from mpeg4fba.cli.points import _upright
+    from mpeg4fba.render.points import upright
     from mpeg4fba.cloning import find_feature_points
     from mpeg4fba.render.preview import save_png
     from mpeg4fba.render.points import points_image
@@ -65,7 +65,7 @@ def main(argv=None) -> int:
     for caption, face in cases:
         found = find_feature_points(face)
         pts = found.points.positions_only()
-        shown, shown_pts = _upright(face, pts, found.up, found.forward)
+        shown, shown_pts = upright(face, pts, found.up, found.forward)
         tiles.append(points_image(shown, shown_pts, confidences=found.confidence, size=SIZE,
                                   views=("front",)))
         worst = found.lowest()

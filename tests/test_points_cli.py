@@ -169,15 +169,15 @@ def test_complete_points_keeps_a_complete_face_as_it_is(head):
     assert report.found is None and not report.added and face.points == before
 
 
-def test_the_picture_shows_a_z_up_head_upright(head):
-    from mpeg4fba.cli.points import _upright
+def test_the_picture_shows_a_z_up_headupright(head):
+    from mpeg4fba.render.points import upright
     from mpeg4fba.fba.face import FaceMesh, FaceModel
 
     R = np.array([[0, 0, 1], [1, 0, 0], [0, 1, 0]], float)     # y up -> z up, facing +x
     skin = head.meshes["Skin"]
     turned = FaceModel([FaceMesh("Skin", head.world_vertices("Skin") @ R.T, skin.triangles)])
     pts = FeaturePointSet({k: head.points[k] @ R.T for k in ("9.3", "2.1")})
-    shown, shown_pts = _upright(turned, pts, up=R @ [0, 1, 0], forward=R @ [0, 0, 1])
+    shown, shown_pts = upright(turned, pts, up=R @ [0, 1, 0], forward=R @ [0, 0, 1])
     assert np.allclose(shown.world_vertices("Skin"), head.world_vertices("Skin"))
     assert np.allclose(shown_pts["9.3"], head.points["9.3"])
 

@@ -143,8 +143,8 @@ def _points(head: str, output: str, edit: bool, given: Optional[str], snap: bool
         from ..formats.fpjson import write_feature_points_json
         write_feature_points_json(plain, output, confidences=confidence or None)
         if preview:
-            from ..render.points import render_points
-            shown, shown_points = _upright(face, plain, up, forward)
+            from ..render.points import render_points, upright
+            shown, shown_points = upright(face, plain, up, forward)
             render_points(shown, shown_points, preview, confidences=confidence or None)
             written.append(preview)
     click.echo(f"wrote {', '.join(written)}")
@@ -177,26 +177,3 @@ def frame_of_points(points) -> tuple:
         return None, None
     up = up / np.linalg.norm(up)
     return up, np.cross(left, up)
-
-
-def _upright(face, points, up, forward) -> tuple:
-    """(face, points) turned so that the head found looks down +z with +y up, as the
-    pictures are drawn (a head with +Z up or facing +X is shown from the front too)."""
-    if up is None or forward is None:
-        return face, points
-    from ..fba.face import FaceMesh, FaceModel
-    import numpy as np
-
-    up = np.asarray(up, float) / np.linalg.norm(up)
-    forward = np.asarray(forward, float) - np.dot(forward, up) * up
-    forward /= np.linalg.norm(forward)
-    R = np.array([np.cross(up, forward), up, forward])      # rows: the face's left, up, forward
-    if np.allclose(R, np.eye(3)):
-        return face, points
-    meshes = [FaceMesh(n, face.world_vertices(n) @ R.T, m.triangles, color=m.color)
-              for n, m in face.meshes.items()]
-    turned = FaceModel(meshes, name=face.name)
-    turned.colors = dict(face.colors)
-    M = np.eye(4)
-    M[:3, :3] = R
-    return turned, points.transformed(M)

@@ -32,7 +32,7 @@ import numpy as np
 from ..fba.featurepoints import FeaturePointSet, normalise_id
 from .preview import project_points, render_face, save_png
 
-__all__ = ["render_points", "points_image", "confidence_color", "NO_CONFIDENCE"]
+__all__ = ["render_points", "points_image", "confidence_color", "NO_CONFIDENCE", "upright"]
 
 #: The colour of a point given without a confidence (RGB, 0-1).
 NO_CONFIDENCE = (0x3D / 255, 0x8B / 255, 0xFD / 255)
@@ -179,3 +179,25 @@ def render_points(face, points: FeaturePointSet, path: Union[str, os.PathLike], 
     a rename); return the path.  ``kw``: ``views``, ``labels``, ``backend``."""
     image = points_image(face, points, confidences=confidences, size=size, **kw)
     return save_png(path, image)
+
+
+def upright(face, points, up, forward) -> tuple:
+    """(face, points) turned so that the head found looks down +z with +y up, as the
+    pictures are drawn (a head with +Z up or facing +X is shown from the front too)."""
+    if up is None or forward is None:
+        return face, points
+    from ..fba.face import FaceMesh, FaceModel
+
+    up = np.asarray(up, float) / np.linalg.norm(up)
+    forward = np.asarray(forward, float) - np.dot(forward, up) * up
+    forward /= np.linalg.norm(forward)
+    R = np.array([np.cross(up, forward), up, forward])      # rows: the face's left, up, forward
+    if np.allclose(R, np.eye(3)):
+        return face, points
+    meshes = [FaceMesh(n, face.world_vertices(n) @ R.T, m.triangles, color=m.color)
+              for n, m in face.meshes.items()]
+    turned = FaceModel(meshes, name=face.name)
+    turned.colors = dict(face.colors)
+    M = np.eye(4)
+    M[:3, :3] = R
+    return turned, points.transformed(M)

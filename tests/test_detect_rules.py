@@ -176,10 +176,10 @@ def test_convention_points_follow_their_proportions_on_a_flat_face():
     pos = {k: np.array(v, dtype=float) for k, v in pos.items()}
     got = D._convention_points(V, T, pos, set(pos))
     assert set(got) == set(D.CONVENTION) | set(D._CONVENTION_RIGHT)
-    _, a, b = D.CONVENTION["2.11"]
-    assert got["2.11"][:2] == pytest.approx([a * 0.35, -1.7 + b * 0.65])
-    _, a, b = D.CONVENTION["4.5"]                     # eye centre (0.5, 0), unit 0.7
-    assert got["4.5"][:2] == pytest.approx([0.5 + a * 0.7, b * 0.7])
+    _, a, b = D.CONVENTION["8.5"]                     # mid 8.1, corner 8.3
+    assert got["8.5"][:2] == pytest.approx([a * 0.35, -1.05 + b * 0.1])
+    _, a, b = D.CONVENTION["9.5"]                     # half the canthi's distance 0.7
+    assert got["9.5"][:2] == pytest.approx([a * 0.7, -0.75 + b * 1.4])
     # left and right mirror each other, and all lie on the skin
     for k, m in D._CONVENTION_RIGHT.items():
         assert got[k] == pytest.approx(got[m] * [-1, 1, 1])

@@ -17,7 +17,7 @@ import pytest
 
 from mpeg4fba.cloning import (CRISP_POINTS, FaceNotFoundError, FoundPoints,
                               find_feature_points, snap_points)
-from mpeg4fba.cloning.detect import (_convention_points, _menton, _profile,
+from mpeg4fba.cloning.detect import (_anchors, _convention_points, _menton, _profile,
                                      _profile_points)
 from mpeg4fba.fba.face import FaceMesh, FaceModel
 from mpeg4fba.fba.featurepoints import FeaturePointSet
@@ -82,6 +82,9 @@ def _errors(face: FaceModel, found: FoundPoints, truth_face: FaceModel) -> dict:
     true_pos = {k: truth_face.points[k] / src_es - eyes for k in truth_face.points}
     true_pos["2.1"] = menton / src_es - eyes
     conv = _convention_points(V, T, true_pos, set(true_pos))
+    # the brows and chin corners: the head's own point moved as the template's is
+    # (TEMPLATE_SHIFT), on its skin
+    conv.update({k: b @ V[T[t]] for k, (t, b) in _anchors(V, T, true_pos).items()})
     scale = es / src_es
     M = _last_turn
     truth["2.1"] = menton @ M.T * scale

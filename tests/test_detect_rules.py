@@ -4,6 +4,8 @@ the mid plane, the eye opening seen from the front, the lips' groove, the points
 the landmark convention's proportions.  Units are the template's (eye separations, ES)."""
 from __future__ import annotations
 
+from types import SimpleNamespace
+
 import numpy as np
 import pytest
 
@@ -146,6 +148,43 @@ def test_eye_opening_seen_from_the_front():
     # no opening: nothing
     V2, T2 = _grid(np.arange(-0.2, 1.2, 0.02), np.arange(-0.5, 0.5, 0.02), lambda X, Y: X * 0)
     assert D._eye_opening(V2, T2, np.array([0.5, 0.0, 0.0]), left=True) == {}
+
+
+def _two_eyes(inner: float, outer: float, y0: float = 0.0):
+    """A flat skin (z = 1) with a rectangular opening per eye from |x| = ``inner`` to
+    ``outer``, 0.1 tall round y = ``y0``, and the template's eyes at y = 0."""
+    V, T = _grid(np.arange(-1.0, 1.0, 0.01), np.arange(-0.7, 0.5, 0.01), lambda X, Y: X * 0 + 1.0)
+    c = V[T].mean(1)
+    hole = (np.abs(c[:, 0]) > inner) & (np.abs(c[:, 0]) < outer) & (np.abs(c[:, 1] - y0) < 0.05)
+    tpl = SimpleNamespace(points={"3.7": np.array([0.65, 0, 1.0]), "3.11": np.array([0.27, 0, 1.0]),
+                                  "3.12": np.array([-0.65, 0, 1.0]), "3.8": np.array([-0.27, 0, 1.0])})
+    return V, T[~hole], tpl
+
+
+def test_an_eye_opening_cut_short_gets_its_inner_corner_by_proportion():
+    # an eye's opening: both corners where it ends
+    V, T, tpl = _two_eyes(0.25, 0.65)
+    got = D._eye_points(V, T, tpl)
+    assert got["3.11"][0] == pytest.approx(0.25, abs=0.02)
+    assert got["3.8"][0] == pytest.approx(-0.25, abs=0.02)
+    # a coarse mesh's triangles bridge the lids at the inner corners: the openings end
+    # 0.15 further out, too far for an eye (60 % of the outer corner's distance)
+    V, T, tpl = _two_eyes(0.40, 0.65)
+    got = D._eye_points(V, T, tpl)
+    assert got["3.7"][0] == pytest.approx(0.65, abs=0.02)
+    assert got["3.11"][0] == pytest.approx(D.INNER_CANTHAL_RATIO * got["3.7"][0], abs=0.005)
+    assert got["3.8"][0] == pytest.approx(-D.INNER_CANTHAL_RATIO * got["3.7"][0], abs=0.02)
+    assert got["3.11"][1] == pytest.approx(0.0, abs=0.06) and got["3.11"][2] == pytest.approx(1.0)
+
+
+def test_eyes_lower_than_the_templates_are_found():
+    # the rigid fit leaves a long face's eyes up to a third of an eye separation below
+    # the template's: the opening is searched that far
+    V, T, tpl = _two_eyes(0.25, 0.65, y0=-0.3)
+    got = D._eye_points(V, T, tpl)
+    assert set(got) == {"3.7", "3.11", "3.1", "3.3", "3.12", "3.8", "3.2", "3.4"}
+    assert got["3.1"][1] == pytest.approx(-0.25, abs=0.02)
+    assert got["3.3"][1] == pytest.approx(-0.35, abs=0.02)
 
 
 def test_lips_groove_ends_at_the_commissures():

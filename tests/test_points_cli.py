@@ -150,6 +150,8 @@ def test_clone_finds_the_points_of_a_head_without_a_point_file(files):
     assert r.exit_code == 0, r.output
     said = [line for line in r.output.splitlines() if "no feature points given" in line]
     assert len(said) == 1 and "lowest confidence" in said[0] and "auto.points.json" in said[0]
+    # both faces' points found by one set of rules (the mapping needs them to agree)
+    assert "the source's skin points found the same way" in said[0]
     assert "check: 0 errors" in r.output
     pts, _ = read_feature_points_json(files / "auto.points.json")
     assert set(REQUIRED_POINTS) <= set(pts)
@@ -244,3 +246,18 @@ def test_points_and_clone_on_a_skinned_glb_of_several_primitives(files, head):
     r = CliRunner().invoke(main, ["clone", str(files / "skinned.glb"), "-o", str(files / "skinned_anim.glb")])
     assert r.exit_code == 0, r.output
     assert "no feature points given" in r.output and "check: 0 errors" in r.output
+
+
+def test_matched_source_takes_the_found_skin_points_and_keeps_the_rest():
+    from mpeg4fba.cloning import find_feature_points
+    from mpeg4fba.cloning.autopoints import matched_source
+    head = reference_head(resolution=0.5)
+    found = find_feature_points(head)
+    twin = matched_source(head, found=found)
+    assert twin.fat is head.fat and twin.fapu == head.fapu and twin is not head
+    for k in ("2.4", "3.7", "4.5", "8.3", "9.3"):            # skin: the detector's
+        assert np.allclose(twin.points[k], found.points[k]), k
+    for k in ("3.5", "3.6", "9.10", "9.11"):                 # parts: the head's own
+        assert np.allclose(twin.points[k], head.points[k]), k
+    # the head itself is untouched
+    assert np.allclose(head.points["4.5"], reference_head(resolution=0.5).points["4.5"])

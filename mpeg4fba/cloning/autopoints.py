@@ -6,6 +6,12 @@ points gets every point the geometry has; a face with some keeps them and gets t
 missing required ones; with ``snap=True`` its crisp given points (lip corners, eye
 corners, nose tip, ...) are moved onto the geometry near them first.
 
+:func:`matched_source` is what it then does with the source when the target's points
+were all found: the source's skin points are found the same way, so both faces' points
+follow one convention and share the detector's habits (a mapping is only as good as
+the agreement of its two sets of points; the source keeps its own FAPU, FAT and part
+points).
+
 >>> from mpeg4fba.models import reference_head
 >>> from mpeg4fba.fba import FeaturePointSet
 >>> face = reference_head(resolution=0.5)
@@ -17,15 +23,18 @@ corners, nose tip, ...) are moved onto the geometry near them first.
 """
 from __future__ import annotations
 
+import copy
+import warnings
 from dataclasses import dataclass, field
 from typing import Iterable, Optional
 
 from ..fba.face import FaceModel
 from ..fba.featurepoints import FeaturePointSet, point_order
 from .alignment import REQUIRED_POINTS
-from .detect import CRISP_POINTS, FoundPoints, find_feature_points, snap_points
+from .detect import (_PART_OF, CRISP_POINTS, FaceNotFoundError, FoundPoints,
+                     find_feature_points, snap_points)
 
-__all__ = ["PointReport", "complete_points"]
+__all__ = ["PointReport", "complete_points", "matched_source"]
 
 
 @dataclass(frozen=True)
@@ -75,3 +84,41 @@ def complete_points(face: FaceModel, *, required: Iterable[str] = REQUIRED_POINT
         return PointReport(kept=tuple(given), snapped=snapped)
     return PointReport(kept=tuple(given), added=tuple(point_order(take)), snapped=snapped,
                        found=found)
+
+
+def matched_source(source: FaceModel, *, found: Optional[FoundPoints] = None) -> FaceModel:
+    """A copy of ``source`` whose skin points are the ones
+    :func:`~mpeg4fba.cloning.detect.find_feature_points` finds on it (``found``, or found
+    now), for mapping it onto a target whose points were all found: the same rules and
+    the same convention on both sides.  Its FAPU (from its own points), FAT, meshes and
+    the points of its eyes, teeth and tongue stay its own.  A source the detector
+    cannot read as a face is returned as it is, with a warning.
+
+    >>> from mpeg4fba.models import reference_head
+    >>> head = reference_head(resolution=0.5)
+    >>> twin = matched_source(head)
+    >>> import numpy as np
+    >>> twin.fat is head.fat, twin.fapu == head.fapu
+    (True, True)
+    >>> bool(np.all(twin.points["3.5"] == head.points["3.5"]))      # a part's point: kept
+    True
+    """
+    if found is None:
+        try:
+            found = find_feature_points(source)
+        except FaceNotFoundError as e:
+            warnings.warn(f"the source's points are used as given (the target's were found): {e}",
+                          stacklevel=2)
+            return source
+    fapu = source.fapu
+    positions = {k: source.points[k] for k in source.points}
+    ties = dict(source.points.vertices)
+    for k in found.points:
+        if k in _PART_OF:
+            continue
+        positions[k] = found.points[k]
+        ties.pop(k, None)
+    out = copy.copy(source)
+    out.points = FeaturePointSet(positions, ties)
+    out.fapu = fapu
+    return out

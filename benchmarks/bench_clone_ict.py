@@ -305,10 +305,8 @@ def main(argv=None) -> int:
     ap.add_argument("--oracle", action="store_true",
                     help="align by the true correspondence (default cloner, and support=0)")
     args = ap.parse_args(argv)
-    try:
-        data = ict.load_ict()
-    except FileNotFoundError as e:
-        print(f"skipped: {e}")
+    data = ict.load_or_say()
+    if data is None:
         return 0
     names = list(data.expressions) if args.all else list(EXPRESSIONS)
     if args.pairs:

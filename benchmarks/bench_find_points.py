@@ -42,9 +42,10 @@ from the identity).  Source: identity :data:`SOURCE_SEED` (full mesh, our picked
 Targets: of each of the first ``--clone`` identities (default all), the head with
 eyeballs (full and decimated in turn) and the same mesh without eyeballs.  The cloner needs an upright face, so it runs in the head's own frame:
 the found points are carried back by the known placement.  Each target is cloned twice:
-with its found points from the source with its skin points found the same way (what
-``mpeg4fba clone`` does when it finds all the target's points:
-:func:`mpeg4fba.cloning.autopoints.matched_source`), and with the landmark points
+with its found points put in the source's convention (what ``mpeg4fba clone`` does when
+it finds all the target's points: :func:`mpeg4fba.cloning.autopoints.matched_points`,
+from the source's given points and the ones the detector finds on it), and with the
+landmark points
 (:func:`benchmarks.ict.landmark_truth`: the landmark table where it defines a point, our
 picked point of the same identity elsewhere) from the source as given; and, for context,
 a third time with our picked points; per pair the mean (over expressions of the mean
@@ -202,6 +203,11 @@ def _surface(face, eyes: bool) -> tuple:
     return np.vstack(verts), np.vstack(tris)
 
 
+#: (source face, what the detector finds on it) once the cloning part needs the found
+#: points in the source's convention (set by :func:`main`)
+SOURCE_FOUND = None
+
+
 def run_case(det: Detector, ident: Identity, variant: int) -> tuple:
     """Detect the points of one head; (result dict, found points in the head frame or None)."""
     mesh, eyes = VARIANTS[variant]
@@ -238,6 +244,11 @@ def run_case(det: Detector, ident: Identity, variant: int) -> tuple:
         k = min(conf, key=conf.get)
         res["lowest_confidence"] = (k, float(conf[k]))
     P = found.points
+    if SOURCE_FOUND is not None and det.real:
+        from mpeg4fba.cloning.autopoints import matched_points
+        src, src_found = SOURCE_FOUND
+        matched = matched_points(world, found, src, source_found=src_found)
+        res["matched"] = {k: [round(float(x), 6) for x in pl.undo(matched[k])] for k in matched}
     head = FeaturePointSet({k: pl.undo(P[k]) for k in P}, P.vertices)
     res["found"] = list(head)
     # against the landmark truth
@@ -621,10 +632,8 @@ def main(argv=None) -> int:
     ap.add_argument("--md", type=Path, default=None,
                     help="write the tables (and the per-head lines) as a markdown page here")
     args = ap.parse_args(argv)
-    try:
-        data = ict.load_ict()
-    except FileNotFoundError as e:
-        print(f"skipped: {e}")
+    data = ict.load_or_say()
+    if data is None:
         return 0
     n = args.identities or (3 if args.quick else len(REGRESSION_SEEDS))
     if args.seed is None:
@@ -648,14 +657,14 @@ def main(argv=None) -> int:
     print(f"commit {git_commit()}, python {platform.python_version()}, case seeds {seeds}")
 
     source = ict.ict_face(data, ict.identity(data, SOURCE_SEED), name=f"ICT-{SOURCE_SEED}")
-    # what `mpeg4fba clone` does when it finds all the target's points: the source's skin
-    # points found the same way (cloning.autopoints.matched_source)
-    matched = source
+    # what `mpeg4fba clone` does when it finds all the target's points: puts them in the
+    # source's convention (cloning.autopoints.matched_points), from what the detector
+    # finds on the source
+    global SOURCE_FOUND
     if det.real and n_clone:
-        from mpeg4fba.cloning.autopoints import matched_source
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            matched = matched_source(source)
+            SOURCE_FOUND = (source, det.find(ict.placed_face(source, None, name=source.name)))
     if det.real:                   # warm-up, untimed: the first call builds the template
         t0 = time.perf_counter()
         try:
@@ -691,7 +700,10 @@ def main(argv=None) -> int:
                 if heads[v] is None:
                     auto = {"raised": "detection raised: " + case["raised"]}
                 else:
-                    auto = clone_error(data, matched, truth, heads[v], eyes)
+                    use = heads[v]
+                    if "matched" in case:
+                        use = FeaturePointSet({k: np.asarray(x) for k, x in case["matched"].items()})
+                    auto = clone_error(data, source, truth, use, eyes)
                 picked = clone_error(data, source, truth, truth.points, eyes) if eyes else {}
                 pairs.append({"name": name, "eyes": eyes, "auto": auto, "landmark": clean,
                               "picked": picked})

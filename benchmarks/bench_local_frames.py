@@ -54,10 +54,8 @@ def main(argv=None) -> int:
     ap.add_argument("--quick", action="store_true")
     ap.add_argument("--seeds", type=int, nargs=2, default=(1, 2))
     args = ap.parse_args(argv)
-    try:
-        data = ict.load_ict()
-    except FileNotFoundError as e:
-        print(f"skipped: {e}")
+    data = ict.load_or_say()
+    if data is None:
         return 0
     a, b = args.seeds
     A = ict.ict_face(data, ict.identity(data, a), name=f"ICT-{a}")

@@ -96,10 +96,8 @@ def main(argv=None) -> int:
     ap.add_argument("--seeds", default="101-120", help="training identity seeds, e.g. 101-120")
     ap.add_argument("--rounds", type=int, default=3)
     args = ap.parse_args(argv)
-    try:
-        data = ict.load_ict()
-    except FileNotFoundError as e:
-        print(f"skipped: {e}")
+    data = ict.load_or_say()
+    if data is None:
         return 0
     seeds = _seeds(args.seeds)
     shift: dict = {}

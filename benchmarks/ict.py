@@ -69,7 +69,7 @@ from mpeg4fba.fba.face import FaceMesh, FaceModel
 from mpeg4fba.fba.featurepoints import FeaturePointSet
 from mpeg4fba.cloning.surface import vertex_normals  # noqa: F401  (re-exported)
 
-__all__ = ["IctData", "IctLayout", "load_ict", "shared_root", "ict_path", "identity",
+__all__ = ["IctData", "IctLayout", "load_ict", "load_or_say", "shared_root", "ict_path", "identity",
            "mesh_layout", "ict_face", "ict_face_decimated", "split_deltas", "join",
            "feature_point_ids", "spine_top", "line_hits", "decimate", "decimation_report",
            "skin_regions", "flipped_triangles", "vertex_normals", "MESH_NAMES", "FP_JSON",
@@ -166,6 +166,16 @@ def load_ict(shared: Optional[Path] = None) -> IctData:
             landmarks=z["landmarks_multipie68"].astype(np.int64),
             source_commit=str(z["source_commit"]) if "source_commit" in z.files else "",
             path=path)
+
+
+def load_or_say(shared: Optional[Path] = None) -> Optional[IctData]:
+    """:func:`load_ict`, or None after printing why it is skipped (a benchmark without
+    ``../shared`` says so and exits 0)."""
+    try:
+        return load_ict(shared)
+    except FileNotFoundError as e:
+        print(f"skipped: {e}")
+        return None
 
 
 def identity(data: IctData, seed: int, scale: float = 1.0) -> np.ndarray:

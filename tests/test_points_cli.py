@@ -150,8 +150,8 @@ def test_clone_finds_the_points_of_a_head_without_a_point_file(files):
     assert r.exit_code == 0, r.output
     said = [line for line in r.output.splitlines() if "no feature points given" in line]
     assert len(said) == 1 and "lowest confidence" in said[0] and "auto.points.json" in said[0]
-    # both faces' points found by one set of rules (the mapping needs them to agree)
-    assert "the source's skin points found the same way" in said[0]
+    # moved into the source's convention (the mapping needs both faces' points to agree)
+    assert "put in the source's convention" in said[0]
     assert "check: 0 errors" in r.output
     pts, _ = read_feature_points_json(files / "auto.points.json")
     assert set(REQUIRED_POINTS) <= set(pts)
@@ -248,16 +248,20 @@ def test_points_and_clone_on_a_skinned_glb_of_several_primitives(files, head):
     assert "no feature points given" in r.output and "check: 0 errors" in r.output
 
 
-def test_matched_source_takes_the_found_skin_points_and_keeps_the_rest():
+def test_matched_points_carry_the_sources_convention_to_the_target():
     from mpeg4fba.cloning import find_feature_points
-    from mpeg4fba.cloning.autopoints import matched_source
-    head = reference_head(resolution=0.5)
-    found = find_feature_points(head)
-    twin = matched_source(head, found=found)
-    assert twin.fat is head.fat and twin.fapu == head.fapu and twin is not head
-    for k in ("2.4", "3.7", "4.5", "8.3", "9.3"):            # skin: the detector's
-        assert np.allclose(twin.points[k], found.points[k]), k
-    for k in ("3.5", "3.6", "9.10", "9.11"):                 # parts: the head's own
-        assert np.allclose(twin.points[k], head.points[k]), k
-    # the head itself is untouched
-    assert np.allclose(head.points["4.5"], reference_head(resolution=0.5).points["4.5"])
+    from mpeg4fba.cloning.autopoints import matched_points
+    source = reference_head(resolution=0.5)
+    target = reference_head(resolution=0.6, face_width=1.08, jaw=0.94, seed=3)
+    s_found, t_found = find_feature_points(source), find_feature_points(target)
+    got = matched_points(target, t_found, source, source_found=s_found)
+    # the detector's convention and the reference head's differ (the ICT landmarks' lip
+    # corners, eye corners and brows): moved by the source's difference, the target's
+    # points land near its own (a reference head of other proportions)
+    es_t = es(target)
+    for k in ("2.4", "3.8", "3.11", "4.5", "8.3"):
+        before = np.linalg.norm(t_found.points[k] - target.points[k]) / es_t
+        after = np.linalg.norm(got[k] - target.points[k]) / es_t
+        assert after < max(0.5 * before, 0.02), (k, before, after)
+    # parts' points are left as found
+    assert np.allclose(got["3.5"], t_found.points["3.5"])

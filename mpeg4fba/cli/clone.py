@@ -59,7 +59,7 @@ def _say_points(report, target: str, where: str) -> None:
         name = os.path.basename(target)
         how = (f"no feature points given: found {len(report.added)}" if not report.kept else
                f"{len(report.kept)} feature points given: found the {len(report.added)} missing")
-        same = "; the source's skin points found the same way" if not report.kept else ""
+        same = "; put in the source's convention" if not report.kept else ""
         click.echo(f"{name}: {how} on its geometry (lowest confidence {conf:.2f}: {worst}{same}); "
                    f"wrote them to {where} (review: mpeg4fba points {target} --points {where} --edit)")
 
@@ -127,10 +127,11 @@ def clone_command(faces: tuple, output: str, source_points: Optional[str], targe
         from ..cloning.autopoints import complete_points
         state["points"] = complete_points(state["target"], snap=snap)
         if state["points"].added and not state["points"].kept:
-            # all found: the source's skin points are found the same way, so both sets
-            # follow one convention (the mapping needs them to agree, not to be "right")
-            from ..cloning.autopoints import matched_source
-            state["source"] = matched_source(state["source"])
+            # all found: moved into the source's convention, so both faces' points agree
+            # (the mapping needs them to agree more than to be anyone's "right")
+            from ..cloning.autopoints import matched_points
+            state["target"].points = matched_points(state["target"], state["points"].found,
+                                                    state["source"])
         if state["points"].added:
             from ..formats.fpjson import write_feature_points_json
             conf = state["points"].found.confidence

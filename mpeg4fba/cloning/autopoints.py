@@ -6,11 +6,10 @@ points gets every point the geometry has; a face with some keeps them and gets t
 missing required ones; with ``snap=True`` its crisp given points (lip corners, eye
 corners, nose tip, ...) are moved onto the geometry near them first.
 
-:func:`matched_source` is what it then does with the source when the target's points
-were all found: the source's skin points are found the same way, so both faces' points
-follow one convention and share the detector's habits (a mapping is only as good as
-the agreement of its two sets of points; the source keeps its own FAPU, FAT and part
-points).
+:func:`matched_points` is what it then does when the target's points were all found:
+it moves them into the source's convention (by how the source's given points differ
+from what the detector finds on the source), so both faces' points agree; the source
+keeps its points, and its FAT stays anchored on them.
 
 >>> from mpeg4fba.models import reference_head
 >>> from mpeg4fba.fba import FeaturePointSet
@@ -23,18 +22,20 @@ points).
 """
 from __future__ import annotations
 
-import copy
 import warnings
 from dataclasses import dataclass, field
 from typing import Iterable, Optional
+
+import numpy as np
 
 from ..fba.face import FaceModel
 from ..fba.featurepoints import FeaturePointSet, point_order
 from .alignment import REQUIRED_POINTS
 from .detect import (_PART_OF, CRISP_POINTS, FaceNotFoundError, FoundPoints,
                      find_feature_points, snap_points)
+from .surface import closest_points
 
-__all__ = ["PointReport", "complete_points", "matched_source"]
+__all__ = ["PointReport", "complete_points", "matched_points"]
 
 
 @dataclass(frozen=True)
@@ -86,39 +87,67 @@ def complete_points(face: FaceModel, *, required: Iterable[str] = REQUIRED_POINT
                        found=found)
 
 
-def matched_source(source: FaceModel, *, found: Optional[FoundPoints] = None) -> FaceModel:
-    """A copy of ``source`` whose skin points are the ones
-    :func:`~mpeg4fba.cloning.detect.find_feature_points` finds on it (``found``, or found
-    now), for mapping it onto a target whose points were all found: the same rules and
-    the same convention on both sides.  Its FAPU (from its own points), FAT, meshes and
-    the points of its eyes, teeth and tongue stay its own.  A source the detector
-    cannot read as a face is returned as it is, with a warning.
+
+def matched_points(target: FaceModel, found: FoundPoints, source: FaceModel, *,
+                   source_found: Optional[FoundPoints] = None) -> FeaturePointSet:
+    """The target's ``found`` points moved into the source's convention: each skin point
+    by the difference, on the source, between its given point and the one
+    :func:`~mpeg4fba.cloning.detect.find_feature_points` finds there (``source_found``,
+    or found now), taken in the detector's frame of each face (eye separations, so it
+    scales with the face), then put back on the target's mesh.
+
+    A mapping is only as good as the agreement of its two faces' points: where the
+    source's modeller put a lip corner a little further in than the detector's rules,
+    the target's goes a little further in too.  The source keeps its points, so its FAT
+    stays anchored on them.  Points of parts (eyes, teeth, tongue), points the source
+    lacks, and all points when the detector cannot read the source as a face (with a
+    warning) stay as found.  The moved points are tied to a vertex of the sheet they
+    lie on (for the mapping; a sidecar keeps the positions).
 
     >>> from mpeg4fba.models import reference_head
     >>> head = reference_head(resolution=0.5)
-    >>> twin = matched_source(head)
+    >>> found = find_feature_points(head)
+    >>> same = matched_points(head, found, head, source_found=found)   # onto itself
     >>> import numpy as np
-    >>> twin.fat is head.fat, twin.fapu == head.fapu
-    (True, True)
-    >>> bool(np.all(twin.points["3.5"] == head.points["3.5"]))      # a part's point: kept
+    >>> bool(np.allclose(same["2.4"], head.points["2.4"], atol=1e-3 * head.fapu.ES0))
     True
     """
-    if found is None:
+    positions = {k: found.points[k] for k in found.points}
+    ties: dict = {}
+    if source_found is None:
         try:
-            found = find_feature_points(source)
+            source_found = find_feature_points(source)
         except FaceNotFoundError as e:
-            warnings.warn(f"the source's points are used as given (the target's were found): {e}",
-                          stacklevel=2)
-            return source
-    fapu = source.fapu
-    positions = {k: source.points[k] for k in source.points}
-    ties = dict(source.points.vertices)
+            warnings.warn(f"the found points are used as found (the source {source.name} "
+                          f"is not read as a face: {e})", stacklevel=2)
+            return FeaturePointSet(positions)
+    ss, Rs = source_found.fit["s"], source_found.fit["R"]
+    st, Rt = found.fit["s"], found.fit["R"]
+    by_mesh: dict = {}
     for k in found.points:
-        if k in _PART_OF:
+        if k in _PART_OF or k not in source.points or k not in source_found.points:
             continue
-        positions[k] = found.points[k]
-        ties.pop(k, None)
-    out = copy.copy(source)
-    out.points = FeaturePointSet(positions, ties)
-    out.fapu = fapu
-    return out
+        # the source's offset in its template frame, then in the target's model frame
+        d = ss * (np.asarray(source.points[k]) - source_found.points[k]) @ Rs.T
+        positions[k] = found.points[k] + d @ Rt / st
+        tie = found.points.vertices.get(k)
+        if tie is not None and tie[0] in target.meshes:
+            by_mesh.setdefault(tie[0], []).append(k)
+    for mesh, keys in by_mesh.items():
+        V = target.world_vertices(mesh)
+        T = target.meshes[mesh].triangles
+        # back onto the sheet the point was found on (closed lips and lids are two sheets
+        # a move of a millimetre can cross): a surface facing away counts a tenth of an
+        # eye separation further
+        here, _, _ = closest_points(np.array([found.points[k] for k in keys]), V, T)
+        N = np.cross(V[T[here, 1]] - V[T[here, 0]], V[T[here, 2]] - V[T[here, 0]])
+        N /= np.maximum(np.linalg.norm(N, axis=1), 1e-300)[:, None]
+        tri, bary, _ = closest_points(np.array([positions[k] for k in keys]), V, T,
+                                      normals=N, facing=0.1 / st)
+        on = np.einsum("nk,nkc->nc", bary, V[T[tri]])
+        positions.update(zip(keys, on))
+        # tied to a vertex of the sheet it lies on (the nearest vertex of all can be the
+        # other lip's, a tenth of a millimetre away across a closed mouth)
+        corner = T[tri, np.argmax(bary, axis=1)]
+        ties.update({k: (mesh, int(v)) for k, v in zip(keys, corner)})
+    return FeaturePointSet(positions, ties)

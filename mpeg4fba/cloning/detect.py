@@ -257,10 +257,10 @@ def _template() -> _Template:
 #: about the median was 1.8 / 1.8 / 2.1 / 2.0 % ES (4.1 / 4.3 / 4.5 / 2.11) carried,
 #: against 2.3 / 2.8 / 4.5 / 2.5 placed in the eyes' (or chin's and mouth's) frame.
 TEMPLATE_SHIFT: dict = {
-    "2.11": (-0.0424, +0.0544, +0.1433),
-    "4.1": (-0.0342, +0.0805, +0.0159),
-    "4.3": (+0.0596, +0.0619, -0.0404),
-    "4.5": (+0.0895, -0.0115, -0.1526),
+    "2.11": (-0.0427, +0.0548, +0.1436),
+    "4.1": (-0.0343, +0.0805, +0.0159),
+    "4.3": (+0.0594, +0.0617, -0.0403),
+    "4.5": (+0.0893, -0.0113, -0.1524),
 }
 
 
@@ -721,25 +721,25 @@ def _convention_points(Vt: np.ndarray, T: np.ndarray, pos: dict, crisp: set) -> 
 #: rim behind its front edge; an inner lip corner deeper in the contact groove; the
 #: commissure and the nose tip a little above where the geometry marks them.
 CONVENTION_SHIFT: dict = {
-    "2.1": (+0.0000, -0.0178, -0.0135),
-    "2.2": (-0.0000, -0.0041, -0.0056),
-    "2.3": (+0.0000, +0.0036, -0.0029),
-    "2.4": (+0.0012, +0.0071, -0.0178),
-    "2.6": (-0.0041, +0.0067, -0.0081),
-    "2.8": (-0.0025, +0.0042, -0.0038),
-    "3.1": (+0.0109, -0.0038, -0.0036),
-    "3.3": (+0.0128, -0.0027, -0.0116),
-    "3.7": (+0.0067, -0.0050, -0.0136),
-    "3.11": (+0.0115, -0.0070, -0.0170),
-    "8.1": (-0.0001, +0.0077, +0.0052),
-    "8.2": (+0.0000, -0.0030, +0.0056),
-    "8.3": (-0.0005, +0.0171, +0.0030),
-    "8.5": (+0.0012, +0.0073, +0.0061),
-    "8.7": (+0.0022, +0.0023, +0.0030),
-    "8.10": (+0.0012, +0.0065, +0.0050),
-    "9.3": (+0.0001, +0.0134, +0.0011),
-    "9.5": (-0.0047, +0.0053, -0.0121),
-    "9.15": (+0.0000, +0.0059, -0.0037),
+    "2.1": (+0.0000, -0.0186, -0.0157),
+    "2.2": (+0.0000, -0.0037, -0.0079),
+    "2.3": (+0.0000, +0.0033, -0.0046),
+    "2.4": (-0.0004, +0.0076, -0.0197),
+    "2.6": (-0.0081, -0.0083, -0.0251),
+    "2.8": (-0.0041, +0.0150, -0.0168),
+    "3.1": (+0.0109, -0.0033, -0.0056),
+    "3.3": (+0.0119, -0.0042, -0.0189),
+    "3.7": (+0.0064, -0.0048, -0.0149),
+    "3.11": (+0.0121, -0.0118, -0.0173),
+    "8.1": (-0.0001, +0.0083, +0.0041),
+    "8.2": (-0.0000, -0.0030, +0.0055),
+    "8.3": (-0.0003, +0.0183, +0.0054),
+    "8.5": (+0.0014, +0.0131, +0.0059),
+    "8.7": (+0.0021, +0.0028, +0.0030),
+    "8.10": (+0.0011, +0.0071, +0.0049),
+    "9.3": (+0.0001, +0.0133, +0.0010),
+    "9.5": (-0.0047, +0.0058, -0.0122),
+    "9.15": (-0.0000, +0.0068, -0.0030),
 }
 
 
@@ -759,7 +759,12 @@ def _shift_to_convention(Vt: np.ndarray, T: np.ndarray, pos: dict, tie: dict,
         moved.append(pos[k] + d)
     if not keys:
         return
-    tri, bary, _ = closest_points(np.array(moved), Vt, T)
+    # back onto the sheet the point was on (closed lips and lids are two sheets that a
+    # shift of a millimetre can cross): a surface facing away counts 0.1 ES further
+    here, _, _ = closest_points(np.array([pos[k] for k in keys]), Vt, T)
+    N = np.cross(Vt[T[here, 1]] - Vt[T[here, 0]], Vt[T[here, 2]] - Vt[T[here, 0]])
+    N /= np.maximum(np.linalg.norm(N, axis=1), 1e-300)[:, None]
+    tri, bary, _ = closest_points(np.array(moved), Vt, T, normals=N, facing=0.1)
     on = np.einsum("nk,nkc->nc", bary, Vt[T[tri]])
     near = cKDTree(Vt).query(on)[1]
     for k, p, v in zip(keys, on, near):
@@ -815,8 +820,8 @@ def _mouth_points(Vt: np.ndarray, T: np.ndarray, stomion: np.ndarray) -> dict:
     stomion (the profile's lips' meeting) to each side; its ends are the commissures
     (8.3, 8.4: the outer corners); the inner corners (2.4, 2.5) are the groove's points
     :data:`INNER_CORNER` of the way out; 2.6-2.9 (the inner lips'
-    midpoints) on the groove half way to the inner corners (its edges above and below
-    when it is open there).  {} without a groove a mouth's width (0.45 to 1.4 ES) whose
+    midpoints) on the groove half way to the inner corners: its edges above and below
+    where it is open there, a cell (0.01 ES) above and below its bottom where closed.  {} without a groove a mouth's width (0.45 to 1.4 ES) whose
     ends lie symmetrically about the mid line (within 15 % of its width)."""
     lo = np.array([-0.75, stomion[1] - 0.2, stomion[2] - 0.6])
     hi = np.array([0.75, stomion[1] + 0.2])
@@ -868,7 +873,12 @@ def _mouth_points(Vt: np.ndarray, T: np.ndarray, stomion: np.ndarray) -> dict:
         arc = np.r_[0, np.cumsum(np.linalg.norm(np.diff(Q, axis=0), axis=1))]
         h = int(np.flatnonzero(ok)[np.argmin(np.abs(arc - 0.5 * arc[-1]))])
         ih, jh = g[h]
-        pu, pd = at(ih, jh, 1), at(ih, jh, -1)
+        if np.isfinite(F[ih, jh]):
+            # closed there: a cell off the groove's bottom, on each lip (the bottom itself
+            # is where both lips touch, and a point there belongs to neither)
+            pu, pd = at(ih, jh + 1), at(ih, jh - 1)
+        else:
+            pu, pd = at(ih, jh, 1), at(ih, jh, -1)
         if pu is not None and pd is not None:
             out[up], out[dn] = pu, pd
     return out

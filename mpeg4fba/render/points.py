@@ -160,16 +160,22 @@ def _legend(fig, W: int, H: int) -> None:
     ax.set_ylim(_LEGEND_H, 0)
     ax.set_axis_off()
     x0, x1, y = 110.0, 110.0 + min(260.0, W * 0.3), _LEGEND_H / 2
+    # a narrow picture puts the markers on a second row (the whole strip needs ~650 px)
+    two_rows = W < 650
+    if two_rows:
+        y, y2, xm = _LEGEND_H * 0.3, _LEGEND_H * 0.72, 30.0
+    else:
+        y2, xm = y, x1 + 40
     ramp = np.array([[confidence_color(c) for c in np.linspace(0, 1, 64)]])
     ax.imshow(ramp, extent=(x0, x1, y + 6, y - 6), aspect="auto", interpolation="bilinear")
     text = dict(fontsize=9, color=(0.15, 0.15, 0.15), va="center")
     ax.text(x0 - 8, y, "confidence 0", ha="right", **text)
     ax.text(x1 + 8, y, "1", ha="left", **text)
-    ax.scatter([x1 + 40], [y], s=50, c=[NO_CONFIDENCE], edgecolors=(0.1, 0.1, 0.1), linewidths=0.6)
-    ax.text(x1 + 50, y, "no confidence given", ha="left", **text)
-    ax.scatter([x1 + 200], [y], s=50, facecolors="none", edgecolors=[(0.3, 0.3, 0.3)],
+    ax.scatter([xm], [y2], s=50, c=[NO_CONFIDENCE], edgecolors=(0.1, 0.1, 0.1), linewidths=0.6)
+    ax.text(xm + 10, y2, "no confidence given", ha="left", **text)
+    ax.scatter([xm + 160], [y2], s=50, facecolors="none", edgecolors=[(0.3, 0.3, 0.3)],
                linewidths=1.2)
-    ax.text(x1 + 210, y, "hidden in this view", ha="left", **text)
+    ax.text(xm + 170, y2, "hidden in this view", ha="left", **text)
 
 
 def render_points(face, points: FeaturePointSet, path: Union[str, os.PathLike], *,

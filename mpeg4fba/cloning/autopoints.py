@@ -127,7 +127,8 @@ def matched_points(target: FaceModel, found: FoundPoints, source: FaceModel, *,
     for k in found.points:
         if k in _PART_OF or k not in source.points or k not in source_found.points:
             continue
-        # the source's offset in its template frame, then in the target's model frame
+        # the source's offset in its template frame (eye separations), then in the
+        # target's model frame
         d = ss * (np.asarray(source.points[k]) - source_found.points[k]) @ Rs.T
         positions[k] = found.points[k] + d @ Rt / st
         tie = found.points.vertices.get(k)

@@ -306,3 +306,16 @@ def test_the_benchmark_measures_given_points_as_exact(data):
     assert max(res["errors"].values()) < 1e-9
     checks = res["plausibility"]["points"].values()
     assert all(r["on_surface"] and r["in_box"] and r.get("side_ok", True) for r in checks)
+
+
+def test_teeth_points_lie_on_the_mid_line(found):
+    """ICT's teeth have roots the template's lack, and its lower incisors sit behind the
+    upper ones: every tooth is taken, each to its row, and the teeth points (midline
+    points of the standard) are the incisors', not a molar's far to one side."""
+    for (seed, variant, pl), (_, truth, _, head, _) in zip(CASES, found):
+        es = float(np.linalg.norm(truth.points["3.5"] - truth.points["3.6"]))
+        for k in ("9.8", "9.9", "9.10", "9.11"):
+            assert k in head, (seed, variant, k)
+            assert abs(head[k][0]) < 0.05 * es, (seed, variant, k, head[k][0] / es)
+        # the upper row's points above the lower row's
+        assert head["9.10"][1] > head["9.9"][1] and head["9.8"][1] > head["9.11"][1]

@@ -1525,19 +1525,23 @@ def _parts(pieces: _Pieces, s, R, t, X, tpl: _Template, pos, tie, reasons) -> se
         used.update(c for c in cand if np.linalg.norm(cent[c] - bc) < br)
         found.add("eye")
     # teeth and tongue: each remaining piece goes to the template part (moved with the
-    # registration) it lies closest to, when it lies on it (median within 0.06 ES, about
-    # 4 mm) and is no bigger than it (a mouth cavity or gums-and-palate piece is bigger)
+    # registration) it lies closest to, when it lies near it (median within TEETH_REACH
+    # of the teeth, 0.06 ES of the tongue) and is no bigger than it (a mouth cavity or gums-and-palate piece is bigger); a
+    # tooth to the row above or below the bite where it stands (_teeth_row)
     names = ("UpperTeeth", "LowerTeeth", "Tongue")
     moved_parts = {n: moved(tpl.parts[n][0]) for n in names}
     trees = {n: cKDTree(v) for n, v in moved_parts.items()}
     size = {n: float(np.ptp(v, axis=0).max()) for n, v in moved_parts.items()}
     take = {n: [] for n in names}
+    up_v, low_v = moved_parts["UpperTeeth"], moved_parts["LowerTeeth"]
     for c in members:
         if c in used:
             continue
         d = {n: float(np.median(trees[n].query(Vt[members[c]])[0])) for n in names}
         n = min(d, key=d.get)
-        if d[n] < 0.06 and ext[c] <= 1.3 * size[n]:
+        if d[n] < (0.06 if n == "Tongue" else TEETH_REACH) and ext[c] <= 1.3 * size[n]:
+            if n != "Tongue":
+                n = _teeth_row(cent[c], up_v, low_v) or n
             take[n].append(c)
     for name, pts in (("UpperTeeth", ("9.8", "9.10")), ("LowerTeeth", ("9.11", "9.9")),
                       ("Tongue", ("6.1", "6.2", "6.3", "6.4"))):
@@ -1548,8 +1552,10 @@ def _parts(pieces: _Pieces, s, R, t, X, tpl: _Template, pos, tie, reasons) -> se
             continue
         allv = np.concatenate([members[c] for c in take[name]])
         P = Vt[allv]
-        # the incisors (or the tongue's middle): within 0.04 ES of the mid plane
-        mid = allv[np.abs(P[:, 0]) < 0.04] if (np.abs(P[:, 0]) < 0.04).any() else allv
+        # the incisors (or the tongue's middle): within 0.04 ES of the mid plane, or of
+        # the nearest the part comes to it (never a molar's top far to one side)
+        ax = np.abs(P[:, 0])
+        mid = allv[ax < ax.min() + 0.04]
         if kind == "teeth":
             hi, lo = mid[np.argmax(Vt[mid, 1])], mid[np.argmin(Vt[mid, 1])]
             pos[pts[0]], tie[pts[0]] = Vt[hi], hi
@@ -1564,6 +1570,31 @@ def _parts(pieces: _Pieces, s, R, t, X, tpl: _Template, pos, tie, reasons) -> se
             pos["6.4"], tie["6.4"] = Vt[r], r
         found.add(kind)
     return found
+
+
+#: How near (median distance, eye separations) a piece must lie to the template's teeth
+#: or tongue, moved with the registration, to be taken for them.  ICT-FaceKit's teeth
+#: have roots the template's lack: on 12 ICT heads 249 of 384 teeth lay further than
+#: 0.06 (up to 0.25), so 0.06 lost the lower incisors and put 9.9 / 9.11 on a molar,
+#: 15-38 % of the eye distance off the mid line.  Nothing but size tells teeth from the
+#: gums-and-palate or mouth-socket pieces there (0.11-0.13, but a whole mouth wide), and
+#: the size test does.  (The tongue keeps 0.06: a mouth's inner lining fits the size.)
+TEETH_REACH = 0.3
+
+
+def _teeth_row(centre: np.ndarray, upper: np.ndarray, lower: np.ndarray,
+               reach: float = 0.1) -> Optional[str]:
+    """Which row a tooth whose centre is ``centre`` belongs to: above the bite there
+    (half way between the template's upper teeth's lowest and lower teeth's highest
+    point within ``reach`` ES across), the upper; below it, the lower; None where the
+    template has no teeth nearby.  (The nearer template row is no answer at the
+    incisors: in a closed bite the lower ones sit right behind the upper ones.)"""
+    def near(P):
+        return P[np.hypot(P[:, 0] - centre[0], P[:, 2] - centre[2]) < reach, 1]
+    u, lo = near(upper), near(lower)
+    if not len(u) or not len(lo):
+        return None
+    return "UpperTeeth" if centre[1] > 0.5 * (u.min() + lo.max()) else "LowerTeeth"
 
 
 def _pupils_in_openings(pos, resid, reasons) -> None:

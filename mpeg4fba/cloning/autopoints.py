@@ -31,9 +31,9 @@ import numpy as np
 from ..fba.face import FaceModel
 from ..fba.featurepoints import FeaturePointSet, point_order
 from .alignment import REQUIRED_POINTS
-from .detect import (_PART_OF, CRISP_POINTS, FaceNotFoundError, FoundPoints,
+from .detect import (PART_OF, CRISP_POINTS, FaceNotFoundError, FoundPoints,
                      find_feature_points, snap_points)
-from .surface import closest_points
+from .surface import onto_same_sheet
 
 __all__ = ["PointReport", "complete_points", "matched_points"]
 
@@ -125,7 +125,7 @@ def matched_points(target: FaceModel, found: FoundPoints, source: FaceModel, *,
     st, Rt = found.fit["s"], found.fit["R"]
     by_mesh: dict = {}
     for k in found.points:
-        if k in _PART_OF or k not in source.points or k not in source_found.points:
+        if k in PART_OF or k not in source.points or k not in source_found.points:
             continue
         # the source's offset in its template frame (eye separations), then in the
         # target's model frame
@@ -137,14 +137,10 @@ def matched_points(target: FaceModel, found: FoundPoints, source: FaceModel, *,
     for mesh, keys in by_mesh.items():
         V = target.world_vertices(mesh)
         T = target.meshes[mesh].triangles
-        # back onto the sheet the point was found on (closed lips and lids are two sheets
-        # a move of a millimetre can cross): a surface facing away counts a tenth of an
-        # eye separation further
-        here, _, _ = closest_points(np.array([found.points[k] for k in keys]), V, T)
-        N = np.cross(V[T[here, 1]] - V[T[here, 0]], V[T[here, 2]] - V[T[here, 0]])
-        N /= np.maximum(np.linalg.norm(N, axis=1), 1e-300)[:, None]
-        tri, bary, _ = closest_points(np.array([positions[k] for k in keys]), V, T,
-                                      normals=N, facing=0.1 / st)
+        # back onto the sheet the point was found on (a surface facing away counts a
+        # tenth of an eye separation further)
+        tri, bary = onto_same_sheet(np.array([found.points[k] for k in keys]),
+                                    np.array([positions[k] for k in keys]), V, T, 0.1 / st)
         on = np.einsum("nk,nkc->nc", bary, V[T[tri]])
         positions.update(zip(keys, on))
         # tied to a vertex of the sheet it lies on (the nearest vertex of all can be the

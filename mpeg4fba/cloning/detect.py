@@ -92,10 +92,10 @@ from ..fba.featurepoints import FeaturePointSet, normalise_id, point_order
 from ..fba.requirements import FAPU_POINTS, PART_POINTS, required_points
 from .alignment import REQUIRED_POINTS
 from .parts import is_eyeball, mesh_components
-from .surface import (boundary_loops, closest_points, feature_warp, register_surface,
-                      vertex_normals)
+from .surface import (boundary_loops, closest_points, feature_warp, onto_same_sheet,
+                      register_surface, vertex_normals)
 
-__all__ = ["FaceNotFoundError", "FoundPoints", "find_feature_points", "snap_points",
+__all__ = ["FaceNotFoundError", "FoundPoints", "find_feature_points", "snap_points", "PART_OF",
            "CRISP_POINTS", "TEMPLATE_ES_MM", "FIT_LIMIT", "SYMMETRY_LIMIT"]
 
 
@@ -133,8 +133,8 @@ SYMMETRY_LIMIT = 0.025
 #: reference variant nose=0.8 0.23), spheres, boxes, blobs 0.12 at most.
 NOSE_LIMIT = 0.18
 
-# points the template carries that belong to parts, and which part
-_PART_OF = {"3.5": "eye", "3.6": "eye", "9.8": "teeth", "9.9": "teeth", "9.10": "teeth",
+#: Points the template carries that belong to parts, and which part.
+PART_OF = {"3.5": "eye", "3.6": "eye", "9.8": "teeth", "9.9": "teeth", "9.10": "teeth",
             "9.11": "teeth", "6.1": "tongue", "6.2": "tongue", "6.3": "tongue", "6.4": "tongue"}
 # left/right pairs (the face's left first), for the symmetry part of the confidence
 _PAIRS = (("2.4", "2.5"), ("2.6", "2.7"), ("2.8", "2.9"), ("2.11", "2.12"), ("2.13", "2.14"),
@@ -759,12 +759,8 @@ def _shift_to_convention(Vt: np.ndarray, T: np.ndarray, pos: dict, tie: dict,
         moved.append(pos[k] + d)
     if not keys:
         return
-    # back onto the sheet the point was on (closed lips and lids are two sheets that a
-    # shift of a millimetre can cross): a surface facing away counts 0.1 ES further
-    here, _, _ = closest_points(np.array([pos[k] for k in keys]), Vt, T)
-    N = np.cross(Vt[T[here, 1]] - Vt[T[here, 0]], Vt[T[here, 2]] - Vt[T[here, 0]])
-    N /= np.maximum(np.linalg.norm(N, axis=1), 1e-300)[:, None]
-    tri, bary, _ = closest_points(np.array(moved), Vt, T, normals=N, facing=0.1)
+    # back onto the sheet the point was on (a surface facing away counts 0.1 ES further)
+    tri, bary = onto_same_sheet(np.array([pos[k] for k in keys]), np.array(moved), Vt, T, 0.1)
     on = np.einsum("nk,nkc->nc", bary, Vt[T[tri]])
     near = cKDTree(Vt).query(on)[1]
     for k, p, v in zip(keys, on, near):
@@ -1378,7 +1374,7 @@ def find_feature_points(face: FaceModel, *, ids: Optional[Iterable[str]] = None)
     _shift_to_convention(Vt, ST, pos, tie, skin_ids)
     # 7.1 and other off-surface points: moved with the registration's displacement nearby
     for k, p in tpl.points.items():
-        if k in pos or k in _PART_OF:
+        if k in pos or k in PART_OF:
             continue
         _, nn = tpl_tree.query(p, k=8)
         pos[k] = p + (X[nn] - tpl.V[nn]).mean(0)
@@ -1388,7 +1384,7 @@ def find_feature_points(face: FaceModel, *, ids: Optional[Iterable[str]] = None)
     # results in model coordinates
     inv = lambda p: (np.asarray(p) - t) @ R / s
     conf = _confidence(pos, resid, crisp_ok, reasons)
-    present = sorted({_PART_OF[k] for k in pos if k in _PART_OF})
+    present = sorted({PART_OF[k] for k in pos if k in PART_OF})
     need = set(required_points(range(3, 69), parts=present, fapu=True, base=REQUIRED_POINTS))
     for kind in ("eye", "teeth", "tongue"):
         need |= set(PART_POINTS[kind])
@@ -1480,8 +1476,8 @@ def _parts(pieces: _Pieces, s, R, t, X, tpl: _Template, pos, tie, reasons) -> se
     Vt = s * pieces.V @ R.T + t
     others = np.unique(pieces.comp[pieces.comp != pieces.skin])
     if not len(others):
-        for k in _PART_OF:
-            reasons[k] = f"no {_PART_OF[k]} mesh: the face is one piece (its skin)"
+        for k in PART_OF:
+            reasons[k] = f"no {PART_OF[k]} mesh: the face is one piece (its skin)"
         return found
     # the template's parts moved by the registration's displacement nearby
     tree = cKDTree(tpl.V)

@@ -21,7 +21,7 @@ __all__ = ["closest_points", "point_triangle", "feature_warp", "boundary_loops",
            "loop_correspondence", "surface_biharmonic", "vertex_normals", "triangle_normals",
            "triangle_edges", "register_surface", "REGISTRATION_SCALES",
            "REGISTRATION_FINE_SCALES", "REGISTRATION_MEMBRANE", "surface_weights",
-           "triangle_neighbours"]
+           "triangle_neighbours", "onto_same_sheet"]
 
 #: The stiffness schedule of :func:`register_surface`: the length scales (in the units of
 #: the vertices; the cloner's normalised space, where the eye separation is 1) over which
@@ -344,6 +344,27 @@ def triangle_normals(vertices: np.ndarray, triangles: np.ndarray) -> np.ndarray:
     T = np.asarray(triangles, dtype=np.int64).reshape(-1, 3)
     n = np.cross(V[T[:, 1]] - V[T[:, 0]], V[T[:, 2]] - V[T[:, 0]])
     return n / np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-300)
+
+
+def onto_same_sheet(before: np.ndarray, after: np.ndarray, vertices: np.ndarray,
+                    triangles: np.ndarray, facing: float) -> tuple:
+    """(triangle index, barycentrics) of each point of ``after`` dropped onto the mesh,
+    on the sheet its point of ``before`` lies on: a triangle facing away from the one
+    under ``before`` counts ``facing`` further (closed lips and lids are two sheets that
+    a move of a millimetre can cross; :func:`closest_points`).
+
+    >>> V = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, .01], [0, 1, .01], [1, 0, .01]], float)
+    >>> T = np.array([[0, 1, 2], [3, 4, 5]])          # two sheets 0.01 apart, facing apart
+    >>> p = np.array([[0.2, 0.2, 0.0]])
+    >>> int(onto_same_sheet(p, p + [0, 0, 0.009], V, T, facing=1.0)[0][0])
+    0
+    """
+    V = np.asarray(vertices, dtype=np.float64)
+    T = np.asarray(triangles, dtype=np.int64).reshape(-1, 3)
+    here, _, _ = closest_points(np.asarray(before, dtype=np.float64), V, T)
+    tri, bary, _ = closest_points(np.asarray(after, dtype=np.float64), V, T,
+                                  normals=triangle_normals(V, T[here]), facing=facing)
+    return tri, bary
 
 
 def vertex_normals(vertices: np.ndarray, triangles: np.ndarray) -> np.ndarray:

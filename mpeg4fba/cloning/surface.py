@@ -21,7 +21,7 @@ __all__ = ["closest_points", "point_triangle", "feature_warp", "boundary_loops",
            "loop_correspondence", "surface_biharmonic", "vertex_normals", "triangle_normals",
            "triangle_edges", "register_surface", "REGISTRATION_SCALES",
            "REGISTRATION_FINE_SCALES", "REGISTRATION_MEMBRANE", "surface_weights",
-           "triangle_neighbours", "onto_same_sheet"]
+           "triangle_neighbours", "onto_same_sheet", "SPDFactoriser"]
 
 #: The stiffness schedule of :func:`register_surface`: the length scales (in the units of
 #: the vertices; the cloner's normalised space, where the eye separation is 1) over which
@@ -123,8 +123,15 @@ def closest_points(points: np.ndarray, vertices: np.ndarray, triangles: np.ndarr
         k = max(int(k), 12)
     used = np.unique(T)
     k = max(1, min(int(k), len(used)))
-    _, near = cKDTree(V[used]).query(P, k=k)
+    gap, near = cKDTree(V[used]).query(P, k=k)
+    gap = np.asarray(gap).reshape(len(P), k)
     near = used[np.asarray(near).reshape(len(P), k)]
+    # a triangle round vertex v lies within v's longest edge of v, so it is no nearer to
+    # a point than |point - v| - that edge: neighbours beyond the best found are skipped
+    i, j, length = triangle_edges(V, T)
+    reach = np.zeros(len(V))
+    np.maximum.at(reach, i, length)
+    np.maximum.at(reach, j, length)
     flat = T.ravel()
     order = np.argsort(flat, kind="stable")
     counts = np.bincount(flat, minlength=len(V))
@@ -135,11 +142,14 @@ def closest_points(points: np.ndarray, vertices: np.ndarray, triangles: np.ndarr
     best_t = np.zeros(len(P), dtype=np.int64)
     best_b = np.zeros((len(P), 3))
     for j in range(k):
-        v = near[:, j]
+        active = np.flatnonzero(gap[:, j] - reach[near[:, j]] <= best_c)
+        if not len(active):
+            continue
+        v = near[active, j]
         # every (point, incident triangle) pair of this neighbour at once
         cnt = counts[v]
-        rows = np.repeat(np.arange(len(P)), cnt)
-        pos = np.arange(rows.size) - np.repeat(np.cumsum(cnt) - cnt, cnt) + start[v][rows]
+        rows = np.repeat(active, cnt)
+        pos = np.arange(rows.size) - np.repeat(np.cumsum(cnt) - cnt, cnt) + np.repeat(start[v], cnt)
         t = tri_of[pos]
         b, d = point_triangle(P[rows], V[T[t]])
         cost = d + facing * (1 - (N[rows] * tn[t]).sum(1)) / 2 if cost_of_facing else d
@@ -283,12 +293,45 @@ def _bilaplacian(V: np.ndarray, T: np.ndarray) -> tuple:
     return (L.T @ sp.diags(1.0 / area) @ L).tocsr(), L, area
 
 
-def _factorise(A: sp.spmatrix):
-    """A solver for the symmetric positive definite sparse ``A``: SuperLU with the
-    ordering for symmetric matrices (about 40 % faster than its default here)."""
-    lu = spla.splu(sp.csc_matrix(A), permc_spec="MMD_AT_PLUS_A",
-                   options={"SymmetricMode": True})
-    return lu.solve
+class SPDFactoriser:
+    """Factorises symmetric positive definite sparse matrices that share one sparsity
+    pattern (the registration's system at each stiffness scale), returning a solver.
+
+    The first matrix (or one of another pattern) is factorised by SuperLU with its
+    minimum-degree ordering for symmetric matrices; that ordering is kept, and later
+    matrices of the same pattern are permuted to it and factorised in the natural order
+    without pivoting (safe for SPD).  On the 16,696-row system of a 30,000-vertex pair
+    that is 0.11 s against 0.22 s per factorisation, with 25 % less fill.  CHOLMOD would
+    refactorise faster still, but scikit-sparse has no wheels (it needs SuiteSparse from
+    the system), and cholespy, which bundles CHOLMOD, cannot refactorise: it took 0.20 s.
+
+    >>> A = sp.csc_matrix(np.array([[4.0, 1, 0], [1, 3, 1], [0, 1, 2]]))
+    >>> f = SPDFactoriser()
+    >>> x1, x2 = f(A)(np.ones(3)), f(2 * A)(np.ones(3))
+    >>> bool(np.allclose(A @ x1, 1)), bool(np.allclose(2 * A @ x2, 1)), f.reused
+    (True, True, 1)
+    """
+
+    def __init__(self) -> None:
+        self._pattern: Optional[tuple] = None
+        self._order: Optional[np.ndarray] = None
+        #: how many factorisations reused the ordering
+        self.reused = 0
+
+    def __call__(self, A: sp.spmatrix):
+        A = sp.csc_matrix(A)
+        A.sort_indices()
+        pattern = (A.shape, A.indptr.tobytes(), A.indices.tobytes())
+        if pattern != self._pattern:
+            lu = spla.splu(A, permc_spec="MMD_AT_PLUS_A", options={"SymmetricMode": True})
+            self._pattern, self._order = pattern, np.argsort(lu.perm_c)
+            return lu.solve
+        q = self._order
+        back = np.argsort(q)
+        lu = spla.splu(A[q][:, q].tocsc(), permc_spec="NATURAL",
+                       options={"SymmetricMode": True, "DiagPivotThresh": 0.0})
+        self.reused += 1
+        return lambda b: lu.solve(np.ascontiguousarray(np.asarray(b)[q]))[back]
 
 
 def surface_biharmonic(vertices: np.ndarray, triangles: np.ndarray, fixed: np.ndarray,
@@ -318,7 +361,7 @@ def surface_biharmonic(vertices: np.ndarray, triangles: np.ndarray, fixed: np.nd
     Qff = Qf[:, free]
     # a whisper of pull towards 0 keeps pieces without a fixed vertex solvable
     eps = 1e-9 * float(Qff.diagonal().mean() or 1.0)
-    solve = _factorise(Qff + eps * sp.eye(len(free)))
+    solve = SPDFactoriser()(Qff + eps * sp.eye(len(free)))
     out[free] = solve(np.ascontiguousarray(-(Qf[:, fixed] @ values)))
     return out
 
@@ -441,12 +484,13 @@ def register_surface(rest: np.ndarray, triangles: np.ndarray, start: np.ndarray,
     normals = vertex_normals(SV, ST)[on]
     bend, L, area = _bilaplacian(R, T)
     m = area[free]
+    factorise = SPDFactoriser()
     for scale in scales:
         # the energy of D = X - rest at this scale, l**4 (thin plate) + l**2 (membrane)
         E = (float(scale) ** 4 * bend + float(membrane) * float(scale) ** 2 * L).tocsr()
         Ef = E[free]
         Eff = Ef[:, free]
-        solve = _factorise(Eff + sp.diags(m))
+        solve = factorise(Eff + sp.diags(m))
         base = Eff @ R[free] - Ef[:, kept] @ (X[kept] - R[kept])
         for _ in range(int(iterations)):
             _, k = tree.query(X[free])

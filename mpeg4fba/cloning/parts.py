@@ -14,7 +14,7 @@ Transforms:
   its meshes *and carries motion* (is driven by some FaceDefTransform of the FAT);
 * in a **target** face, the lowest Transform enclosing all its meshes, provided it holds
   nothing else (the lower teeth and the tongue may share one, a jaw); otherwise the
-  cloner installs a new one (:mod:`mpeg4fba.cloning.fmc`).
+  cloner installs a new one (:class:`mpeg4fba.cloning.part_motion.TransformInstaller`).
 
 >>> from mpeg4fba.models import reference_head
 >>> face = reference_head(resolution=0.5)

@@ -31,7 +31,8 @@ teeth motion.
 where its original vertex is on the source: possible here because the faces come from
 one mesh), to show what the rest of the pipeline does with a perfect alignment: in the
 paper's 2D alignment (the surface refinement skipped), and as the surface points of the
-default cloner (registration result replaced by the truth).
+default cloner (registration result replaced by the truth).  The truth goes in through
+the cloner's ``correspondence=`` keyword (:func:`true_correspondence`).
 
 Each table of the default cloner is followed by its **registration error**: how far the
 surface alignment put each target skin vertex from where its original vertex is on the
@@ -58,6 +59,7 @@ show how much one pair's figures say.
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import sys
 import time
 import warnings
@@ -70,6 +72,7 @@ sys.path.insert(0, str(ROOT))
 
 from benchmarks import ict  # noqa: E402
 from mpeg4fba.cloning import FacialMotionCloner, clone  # noqa: E402
+from mpeg4fba.cloning.correspondence import paper_alignment, surface_alignment  # noqa: E402
 from mpeg4fba.cloning.rigid import fit_rigid  # noqa: E402
 from mpeg4fba.fba.fat import FAT, FaceDefMesh, FaceDefTable  # noqa: E402
 
@@ -165,7 +168,7 @@ def print_table(title: str, results: dict) -> dict:
     return worst
 
 
-def rigid_jaw(data, source, target) -> tuple:
+def rigid_jaw(data, source, target, **options) -> tuple:
     """(recovered angle, true angle) of the lower teeth under jawOpen, degrees."""
     delta = ict.split_deltas(source, data.expressions["jawOpen"])
     meshes = []
@@ -178,7 +181,7 @@ def rigid_jaw(data, source, target) -> tuple:
     src.invalidate()
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        out = clone(src, target)
+        out = clone(src, target, **options)
     rot = [e for e in out.fat[3].transforms if e.field == "rotation"]
     recovered = float(np.degrees(rot[0].rotation[3] * 1024)) if rot else float("nan")
     x = target.world_vertices("LowerTeeth")
@@ -189,48 +192,46 @@ def rigid_jaw(data, source, target) -> tuple:
     return recovered, float(np.degrees(fit.angle)), rot[0].transform if rot else None
 
 
-def _use_true_correspondence() -> None:
-    """Make the cloner align each target skin vertex onto its original vertex's place on
-    the source (ICT ids kept in the faces' ``ict_ids:`` regions)."""
-    import mpeg4fba.cloning.fmc as fmc
-
-    paper_align = fmc.align
-
-    def oracle(target_space, source_space, triangulation="fixed", **kw):
-        aligned, depth, ids, tris = paper_align(target_space, source_space, triangulation, **kw)
-        cloner = _current["cloner"]
-        for mesh, (ft, nt) in cloner.tgt.offsets.items():
-            if mesh not in cloner.src.offsets:
-                continue
-            fs, _ = cloner.src.offsets[mesh]
-            tid = cloner.target.regions[ict.IDS_PREFIX + mesh]
-            sid = cloner.source.regions[ict.IDS_PREFIX + mesh]
-            pos = np.searchsorted(sid, tid)
-            aligned[ft:ft + nt] = source_space.uv[fs + pos]
-            depth[ft:ft + nt] = source_space.depth[fs + pos]
-        return aligned, depth, ids, tris
-
-    fmc.align = oracle
-    original_init = fmc.FacialMotionCloner.__init__
-
-    def init(self, *a, **k):
-        _current["cloner"] = self
-        original_init(self, *a, **k)
-
-    fmc.FacialMotionCloner.__init__ = init
+def true_correspondence(source, target, options):
+    """The cloner's correspondence step with the truth in it (``FacialMotionCloner(...,
+    correspondence=true_correspondence)``): the paper's alignment with each target skin
+    vertex put where its original vertex is on the source (ICT ids kept in the faces'
+    ``ict_ids:`` regions), then, with ``alignment="surface"``, the surface alignment with
+    the registration's result replaced by the true surface points."""
+    corr = paper_alignment(source, target, options.triangulation)
+    aligned, depth = corr.aligned.copy(), corr.aligned_depth.copy()
+    for mesh, (ft, nt) in target.offsets.items():
+        if mesh not in source.offsets:
+            continue
+        fs, _ = source.offsets[mesh]
+        tid = target.face.regions[ict.IDS_PREFIX + mesh]
+        sid = source.face.regions[ict.IDS_PREFIX + mesh]
+        pos = np.searchsorted(sid, tid)
+        aligned[ft:ft + nt] = source.space.uv[fs + pos]
+        depth[ft:ft + nt] = source.space.depth[fs + pos]
+    corr = dataclasses.replace(corr, aligned=aligned, aligned_depth=depth)
+    if options.alignment == "surface":
+        corr = surface_alignment(source, target, corr, options, register=true_registration)
+    return corr
 
 
-_current: dict = {}
+def true_registration(source, target, warped, **options) -> np.ndarray:
+    """A stand-in for :func:`~mpeg4fba.cloning.correspondence.register_skin` returning
+    the true surface points of the target's skin."""
+    out = warped.copy()
+    ft, nt = target.offsets["Skin"]
+    out[ft:ft + nt] = _true_surface_points(source, target)
+    return out
 
 
-def _true_surface_points(cloner) -> np.ndarray:
+def _true_surface_points(source, target) -> np.ndarray:
     """(n, 3) where each target skin vertex's original vertex is on the source's skin, in
-    the source's normalised space (the faces share ICT's numbering)."""
-    ft, nt = cloner.tgt.offsets["Skin"]
-    fs, _ = cloner.src.offsets["Skin"]
-    tid = cloner.target.regions[ict.IDS_PREFIX + "Skin"]
-    sid = cloner.source.regions[ict.IDS_PREFIX + "Skin"]
-    return cloner.src.normalised[fs + np.searchsorted(sid, tid)]
+    the source's normalised space (the faces share ICT's numbering); ``source`` and
+    ``target`` are the cloner's skins."""
+    fs, _ = source.offsets["Skin"]
+    tid = target.face.regions[ict.IDS_PREFIX + "Skin"]
+    sid = source.face.regions[ict.IDS_PREFIX + "Skin"]
+    return source.normalised[fs + np.searchsorted(sid, tid)]
 
 
 def registration_error(cloner, target) -> dict:
@@ -238,23 +239,10 @@ def registration_error(cloner, target) -> dict:
     ft, nt = cloner.tgt.offsets["Skin"]
     iod = float(np.linalg.norm(np.subtract(*cloner.src.space.normalise(
         np.array([cloner.source.points["3.5"], cloner.source.points["3.6"]])))))
-    err = np.linalg.norm(cloner.surface_points[ft:ft + nt] - _true_surface_points(cloner),
-                         axis=1) / iod * 100
+    err = np.linalg.norm(cloner.surface_points[ft:ft + nt]
+                         - _true_surface_points(cloner.src, cloner.tgt), axis=1) / iod * 100
     return {r: (float(err[idx].mean()), float(err[idx].max()))
             for r, idx in region_rows(target).items()}
-
-
-def _use_true_surface_points() -> None:
-    """Make the default cloner's registration return the true surface points."""
-    import mpeg4fba.cloning.fmc as fmc
-
-    def register(self, warped, scales=None):
-        out = warped.copy()
-        ft, nt = self.tgt.offsets["Skin"]
-        out[ft:ft + nt] = _true_surface_points(self)
-        return out
-
-    fmc.FacialMotionCloner._register = register
 
 
 def robustness(data, names, fraction: float, variant: str = "default",
@@ -319,12 +307,13 @@ def main(argv=None) -> int:
           f"targets {B.name} (skin {len(B.meshes['Skin'].vertices):,}) and {D.name} "
           f"(skin {len(D.meshes['Skin'].vertices):,})")
     variants = {"default": {}} if args.quick else VARIANTS
+    extra = {}
     if args.oracle:
-        _use_true_correspondence()
-        _use_true_surface_points()
-        variants = {"oracle alignment": {"alignment": "paper"},
-                    "oracle alignment, support=0": {"alignment": "paper", "support": 0.0},
-                    "oracle surface points": {}}
+        extra = {"correspondence": true_correspondence}
+        variants = {"oracle alignment": {"alignment": "paper", **extra},
+                    "oracle alignment, support=0": {"alignment": "paper", "support": 0.0,
+                                                    **extra},
+                    "oracle surface points": extra}
     summary = []
     for label, opts in variants.items():
         for scale in (False, True):
@@ -343,10 +332,10 @@ def main(argv=None) -> int:
                     reg = registration_error(cloner, target)
                     print("registration error (% IOD, mean / max): " + ", ".join(
                         f"{r} {m:.2f} / {x:.2f}" for r, (m, x) in reg.items()))
-    rec, true, name = rigid_jaw(data, A, B)
+    rec, true, name = rigid_jaw(data, A, B, **extra)
     print(f"\nrigid parts: jawOpen lower teeth on {B.name}: recovered rotation {rec:.2f} deg "
           f"(Transform {name}), true {true:.2f} deg, difference {abs(rec - true):.2f} deg")
-    rec_d, true_d, _ = rigid_jaw(data, A, D)
+    rec_d, true_d, _ = rigid_jaw(data, A, D, **extra)
     print(f"             on {D.name}: recovered {rec_d:.2f} deg, true {true_d:.2f} deg")
     print("\nsummary (mean / max % IOD over the expressions, flipped beyond truth):")
     for label, scale, tname, w in summary:

@@ -1,4 +1,4 @@
-"""Facial Motion Cloning end to end (mpeg4fba.cloning.fmc) on reference heads."""
+"""Facial Motion Cloning end to end (mpeg4fba.cloning.fmc and its steps) on reference heads."""
 from __future__ import annotations
 
 import dataclasses
@@ -335,16 +335,16 @@ def test_variants_still_clone_everything(source, target, options):
     assert validate(out).ok
 
 
-def test_facing_normals_follow_the_sources_winding_and_skip_coarse_meshes(source, target,
-                                                                         monkeypatch):
-    import mpeg4fba.cloning.fmc as fmc
+def test_facing_normals_follow_the_sources_winding_and_skip_coarse_meshes(source, target):
+    from mpeg4fba.cloning.surface import vertex_normals
+    from mpeg4fba.cloning.weights import facing_normals
     c, _ = quiet(FacialMotionCloner, source, target)
-    n = c._facing_normals()
+    n = facing_normals(c.src, c.tgt, c.surface_points, c.facing)
     length = np.linalg.norm(n, axis=1)
     assert np.allclose(length[length > 0], 1) and (length > 0).mean() > 0.8
     # facing the way the source's surface faces where each vertex lands
     w = c.weights
-    src_n = fmc.vertex_normals(c.src.normalised, c.src.triangles)
+    src_n = vertex_normals(c.src.normalised, c.src.triangles)
     towards = np.einsum("ij,ij->i", n, np.asarray(w @ src_n))
     assert np.median(towards[length > 0]) > 0.9
     # a target wound the other way round gets the same normals
@@ -352,11 +352,10 @@ def test_facing_normals_follow_the_sources_winding_and_skip_coarse_meshes(source
                          for m in target.meshes.values()], target.transforms.values(),
                         points=target.points, fapu=target.fapu, fat=target.fat)
     c2, _ = quiet(FacialMotionCloner, source, flipped)
-    assert np.allclose(c2._facing_normals(), n)
+    assert np.allclose(facing_normals(c2.src, c2.tgt, c2.surface_points, c2.facing), n)
     # a target much coarser than the source: no normal counts
-    monkeypatch.setattr(fmc, "FACING_RESOLUTION", 0.1)
-    assert not c._facing_normals().any()
-    assert FacialMotionCloner(source, target, facing=0.0)._facing_normals() is None
+    assert not facing_normals(c.src, c.tgt, c.surface_points, c.facing, resolution=0.1).any()
+    assert facing_normals(c.src, c.tgt, c.surface_points, 0.0) is None
 
 
 def test_the_finer_fit_moves_the_surface_points_and_keeps_the_regions(source, target):
@@ -391,20 +390,26 @@ def test_the_finer_fit_moves_the_surface_points_and_keeps_the_regions(source, ta
 def test_feature_points_are_held_loosely_only_on_a_coarse_target(source, target):
     """In the finer fit a feature point is held loosely where the target's mesh is much
     coarser than the source's (LOOSE_PIN_RESOLUTION), and put back in place at the end."""
-    import mpeg4fba.cloning.fmc as fmc
+    from mpeg4fba.cloning.correspondence import register_skin
+    from mpeg4fba.cloning.skin import coarseness, mean_edge
     from mpeg4fba.cloning.surface import REGISTRATION_FINE_SCALES as FINE
     c, _ = quiet(FacialMotionCloner, source, target)
     stiff, _ = quiet(FacialMotionCloner, source, target, refine=False)
     first, n = c.tgt.offsets[c.tgt.main]
-    ratio, _ = c._coarseness(fmc._mean_edge(c.tgt.normalised[first:first + n],
-                                            target.meshes[c.tgt.main].triangles),
-                             stiff.surface_points[first:first + n])
+    ratio, _ = coarseness(c.src, mean_edge(c.tgt.normalised[first:first + n],
+                                           target.meshes[c.tgt.main].triangles),
+                          stiff.surface_points[first:first + n])
     assert 0.5 < np.median(ratio) < 2        # two meshes of about the same resolution ...
-    held = c._register(stiff.surface_points, FINE)
-    assert np.array_equal(c._register(stiff.surface_points, FINE, loosen=True), held)
+
+    def fit(cloner, **loose):
+        return register_skin(cloner.src, cloner.tgt, stiff.surface_points,
+                             membrane=cloner.membrane, scales=FINE, **loose)
+
+    held = fit(c)
+    assert np.array_equal(fit(c, loose_pins=c.loose_pins), held)
     assert np.array_equal(c.surface_points, held)     # ... so no point is loosened
     every, _ = quiet(FacialMotionCloner, source, target, loose_pins=0.0)   # every point is
-    loose = every._register(stiff.surface_points, FINE, loosen=True)
+    loose = fit(every, loose_pins=every.loose_pins)
     assert np.array_equal(every.surface_points, loose)
     rows = first + c.tgt.main_point_rows()
     assert np.array_equal(loose[rows], stiff.surface_points[rows])   # back in place
@@ -412,8 +417,34 @@ def test_feature_points_are_held_loosely_only_on_a_coarse_target(source, target)
     assert moved.max() > 1e-4 and np.median(moved) < 1e-3
 
 
+def test_a_correspondence_stands_in_for_its_step(source, target):
+    """FacialMotionCloner(..., correspondence=) takes the step's record, or a function of
+    the two skins and the options returning one, in place of the step."""
+    from mpeg4fba.cloning.correspondence import correspond
+    c, _ = quiet(FacialMotionCloner, source, target)
+    again, _ = quiet(FacialMotionCloner, source, target, correspondence=c.correspondence)
+    assert (again.weights != c.weights).nnz == 0
+    assert np.array_equal(again.target_regions, c.target_regions)
+    seen = []
+
+    def step(src, tgt, options):
+        seen.append(options)
+        return correspond(src, tgt, options)
+
+    called, _ = quiet(FacialMotionCloner, source, target, register=False, correspondence=step)
+    plain, _ = quiet(FacialMotionCloner, source, target, register=False)
+    assert len(seen) == 1 and seen[0].register is False
+    assert (called.weights != plain.weights).nnz == 0
+    with pytest.raises(ValueError, match="correspondence must be a Correspondence"):
+        FacialMotionCloner(source, target, correspondence=dataclasses.replace(
+            c.correspondence, aligned=c.aligned[:5]))
+    with pytest.raises(ValueError, match="surface points"):
+        FacialMotionCloner(source, target, correspondence=dataclasses.replace(
+            c.correspondence, surface_points=None))
+
+
 def test_a_triangle_with_two_corners_on_the_other_side_is_hidden():
-    from mpeg4fba.cloning.fmc import visible_triangles
+    from mpeg4fba.cloning.weights import visible_triangles
     regions = np.array([[UPPER] * 3, [UPPER, UPPER, OUTSIDE], [UPPER, UPPER, LOWER],
                         [UPPER, LOWER, OUTSIDE], [LOWER] * 3, [OUTSIDE] * 3])
     # what a lower-lip vertex may take motion from

@@ -12,9 +12,18 @@ alignment space), :mod:`~mpeg4fba.cloning.lips` (lip regions), :mod:`~mpeg4fba.c
 and :mod:`~mpeg4fba.cloning.rigid` (eyes, teeth, tongue, head), :mod:`~mpeg4fba.cloning.checks`
 (feature points on the mesh, in its units), :mod:`~mpeg4fba.cloning.detect` (feature
 points found on a head that has none; :mod:`~mpeg4fba.cloning.autopoints` gives a face
-the ones it lacks), :mod:`~mpeg4fba.cloning.fmc`
-(the whole method), :mod:`~mpeg4fba.cloning.local_frames` (Kong et al.'s local-frame
-cloning for faces that share a mesh).
+the ones it lacks), :mod:`~mpeg4fba.cloning.points` (the points the method needs),
+:mod:`~mpeg4fba.cloning.surface` (closest points, warp, registration on meshes).
+
+The steps of the method, one module each, in the order
+:class:`~mpeg4fba.cloning.fmc.FacialMotionCloner` (:mod:`~mpeg4fba.cloning.fmc`) runs
+them: :mod:`~mpeg4fba.cloning.skin` (both faces' skin in the normalised and alignment
+spaces), :mod:`~mpeg4fba.cloning.correspondence` (alignment and registration),
+:mod:`~mpeg4fba.cloning.weights` (the mapping, lip and eyelid rule included),
+:mod:`~mpeg4fba.cloning.transfer` (the motion of every table through the mapping) and
+:mod:`~mpeg4fba.cloning.part_motion` (eyes, teeth, tongue, head).
+:mod:`~mpeg4fba.cloning.local_frames`: Kong et al.'s local-frame cloning for faces that
+share a mesh; :mod:`~mpeg4fba.cloning.errors`: what both cloners raise and warn.
 """
 from __future__ import annotations
 

@@ -13,7 +13,7 @@ two steps:
    projected surface tears and folds and the mapping picks up motion from the wrong
    part of the face.  Positions only need to bring two faces roughly together (the
    feature-point alignment does the rest); the *motion* is normalised regionally, as the
-   paper does, whatever ``positions`` says (see :mod:`mpeg4fba.cloning.fmc`).
+   paper does, whatever ``positions`` says (see :mod:`mpeg4fba.cloning.transfer`).
 2. **Cylindrical projection** (:class:`~mpeg4fba.cloning.projection.Projection`) to
    ``(angle, height)``: angle 0 at the nose tip, the axis placed so the mouth always
    subtends :data:`~mpeg4fba.cloning.projection.MOUTH_ANGLE`.  The depth of a point is

@@ -45,7 +45,11 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from ..fba.face import FaceModel
+from ..fba.fat import FaceDefTable, interval_weights, table_borders
 from ..fba.featurepoints import FeaturePointError, FeaturePointSet
+from ..fba.morph import FULL_SHAPE, MorphTarget, TargetKey, fat_from_morph_targets
+from .errors import CloneWarning, LocalFrameWarning, TopologyError
+from .parts import find_parts
 
 __all__ = ["SPACES", "SPACE_POINTS", "BASE_POINTS", "LocalFrame", "LocalFrameWarning",
            "TopologyError", "assign_spaces", "LocalFrameCloner", "local_frame_clone"]
@@ -79,14 +83,6 @@ BASE_POINTS = {
     "brows": ("2.1", "4.5", "4.6", "9.3"),
     "rest": ("11.1", "2.13", "2.14", "9.3"),
 }
-
-
-class LocalFrameWarning(UserWarning):
-    """A w-point coordinate too small to scale by."""
-
-
-class TopologyError(ValueError):
-    """Local-frame cloning needs faces that share a mesh."""
 
 
 @dataclass
@@ -137,8 +133,6 @@ def assign_spaces(face: FaceModel, vertices: Mapping[str, np.ndarray],
     ``spaces`` may give, per mesh, an array of space names or indices (the user's map);
     meshes it leaves out are assigned from the feature points.
     """
-    from .parts import find_parts
-
     given = dict(spaces or {})
     ids, owner = [], []
     for k, name in enumerate(SPACES):
@@ -311,9 +305,6 @@ class LocalFrameCloner:
         """The target's morph targets (:class:`~mpeg4fba.fba.morph.MorphTarget`, vertices
         in each mesh's own frame), one per source table and non-zero interval border (the
         full shape, at 63, for a viseme or expression)."""
-        from ..fba.fat import interval_weights
-        from ..fba.morph import FULL_SHAPE, MorphTarget, TargetKey
-        from .fmc import _borders
 
         to_local = {}         # mesh -> (inverse linear part, translation) of its world matrix
         for m in self.meshes:
@@ -322,7 +313,7 @@ class LocalFrameCloner:
         targets = []
         for table in sorted(self.source.fat, key=lambda t: t.key):
             high = table.fap <= 2
-            b = _borders(table)
+            b = table_borders(table)
             values = np.array([FULL_SHAPE]) if high else b[b != 0]
             keys = {m: np.broadcast_to(self.src_world[m], (len(values),) + self.src_world[m].shape).copy()
                     for m in self.meshes}
@@ -343,10 +334,7 @@ class LocalFrameCloner:
         """The target with a FAT made, through the morph-target path
         (:func:`~mpeg4fba.fba.morph.fat_from_morph_targets`), from :meth:`morph_targets`.
         The source's Transform motions are kept for Transforms the target has too."""
-        from ..fba.morph import fat_from_morph_targets
-        from .fmc import CloneWarning, _copy_face
-
-        out = _copy_face(self.target)
+        out = self.target.copy()
         neutral = {m: self.target.meshes[m].vertices for m in self.meshes}
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")      # a table that moves no mesh is fine here
@@ -357,7 +345,6 @@ class LocalFrameCloner:
             dropped |= {t.transform for t in table.transforms if t.transform not in out.transforms}
             if kept:
                 if table.key not in fat:
-                    from ..fba.fat import FaceDefTable
                     fat.add(FaceDefTable(table.fap, [], [], table.select))
                 fat[table.key].transforms.extend(kept)
         if dropped:

@@ -14,7 +14,7 @@ Transforms:
   its meshes *and carries motion* (is driven by some FaceDefTransform of the FAT);
 * in a **target** face, the lowest Transform enclosing all its meshes, provided it holds
   nothing else (the lower teeth and the tongue may share one, a jaw); otherwise the
-  cloner installs a new one (:mod:`mpeg4fba.cloning.fmc`).
+  cloner installs a new one (:class:`mpeg4fba.cloning.part_motion.TransformInstaller`).
 
 >>> from mpeg4fba.models import reference_head
 >>> face = reference_head(resolution=0.5)
@@ -50,7 +50,7 @@ from ..fba.requirements import NOT_SURFACE
 from .rigid import sphere_centre
 from .surface import closest_points, feature_warp
 
-__all__ = ["PartSpec", "PARTS", "find_parts", "mesh_holding", "connected_meshes",
+__all__ = ["PartSpec", "PARTS", "PART_SPECS", "find_parts", "mesh_holding", "connected_meshes",
            "lowest_common_transform", "moving_transforms", "source_transform",
            "target_transform", "enclosed_meshes", "HEAD",
            "mesh_components", "is_eyeball", "EYEBALL_ROUNDNESS", "Components",
@@ -77,7 +77,8 @@ PARTS = (
     PartSpec("lower teeth", "teeth", ("9.11", "9.9"), riders=("tongue",)),
     PartSpec("tongue", "tongue", ("6.1", "6.2", "6.3", "6.4"), riders=("lower teeth",)),
 )
-_SPEC = {p.name: p for p in PARTS}
+#: Part name -> its :class:`PartSpec`.
+PART_SPECS = {p.name: p for p in PARTS}
 #: Name of the whole-head part in :func:`find_parts`'s answer.
 HEAD = "head"
 
@@ -350,7 +351,7 @@ def _enclosed_components(face: FaceModel, found: Components, mesh: str, cut: lis
     np.minimum.at(lo, lab, v)
     np.maximum.at(hi, lab, v)
     for part, labels in cut:
-        if _SPEC[part].kind == "eye":
+        if PART_SPECS[part].kind == "eye":
             # an eye's: wholly inside its sphere grown by a tenth (not the socket round it)
             ball = v[lab == labels[0]]
             centre = sphere_centre(ball)
@@ -593,6 +594,6 @@ def target_transform(face: FaceModel, part: str, parts: dict) -> Optional[str]:
     if part == HEAD:
         return t
     allowed = set(meshes)
-    for rider in _SPEC[part].riders:
+    for rider in PART_SPECS[part].riders:
         allowed |= set(parts.get(rider, ()))
     return t if set(enclosed_meshes(face, t)) <= allowed else None

@@ -21,7 +21,7 @@ Example
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Iterable, Mapping, Optional, Sequence
 
 import numpy as np
@@ -363,6 +363,34 @@ class FaceModel:
             raise ValueError(f"face.colors[{mesh!r}] is one RGB colour or one per vertex "
                              f"([{len(m.vertices)}, 3], finite), not an array of shape {a.shape}")
         return m.display_color(), np.clip(a, 0.0, 1.0)
+
+    def copy(self, share: bool = False) -> "FaceModel":
+        """A copy whose meshes and transforms can be re-parented and edited without
+        touching this face (vertex arrays are shared until replaced); ``share=True``
+        shares the mesh and transform objects too, for a copy that only gets other
+        points or another FAT.  Points, FAPU, FAT, colours, regions and the file
+        attributes (``source``, ``initial_faps``...) are carried over.
+
+        >>> face = FaceModel([FaceMesh("Skin", np.eye(3), [[0, 1, 2]])], name="f")
+        >>> twin = face.copy()
+        >>> twin.meshes["Skin"] is face.meshes["Skin"]
+        False
+        >>> np.shares_memory(twin.meshes["Skin"].vertices, face.meshes["Skin"].vertices)
+        True
+        >>> face.copy(share=True).meshes["Skin"] is face.meshes["Skin"]
+        True
+        """
+        meshes = self.meshes.values() if share else [replace(m) for m in self.meshes.values()]
+        transforms = self.transforms.values() if share else \
+            [replace(t) for t in self.transforms.values()]
+        out = FaceModel(meshes, transforms, points=self.points, fapu=self.fapu, fat=self.fat,
+                        name=self.name)
+        out.colors = dict(self.colors)
+        out.regions = dict(self.regions)
+        for attr in ("source", "initial_faps", "initial_viseme", "initial_expression"):
+            if hasattr(self, attr):
+                setattr(out, attr, getattr(self, attr))
+        return out
 
     # -- the transform tree -------------------------------------------------------------------
     def chain(self, transform: Optional[str]) -> list:

@@ -47,7 +47,7 @@ from typing import Iterable, Iterator, Optional, Sequence
 import numpy as np
 
 __all__ = ["FaceDefMesh", "FaceDefTransform", "FaceDefTable", "FAT", "interval_weights",
-           "rotation_matrices", "TRANSFORM_FIELDS"]
+           "table_borders", "rotation_matrices", "TRANSFORM_FIELDS"]
 
 #: fieldId of a FaceDefTransform -> the Transform field it drives.
 TRANSFORM_FIELDS = {1: "rotation", 2: "scale", 3: "translation"}
@@ -189,6 +189,22 @@ class FaceDefTable:
     def key(self) -> tuple:
         """(fap, select) for FAPs 1 and 2, (fap, 0) for the others."""
         return (self.fap, self.select if self.fap <= 2 else 0)
+
+
+def table_borders(table: FaceDefTable) -> np.ndarray:
+    """The union of a table's interval borders, 0 included ([0, 1] when it has no mesh
+    entry): where a cloner samples the table's motion.
+
+    >>> table_borders(FaceDefTable(3, [FaceDefMesh("Skin", [0, 512, 1024], [0], [[0, 1, 0]] * 2),
+    ...                                FaceDefMesh("Jaw", [-100, 100], [0], [[1, 0, 0]])])).tolist()
+    [-100.0, 0.0, 100.0, 512.0, 1024.0]
+    >>> table_borders(FaceDefTable(48)).tolist()
+    [0.0, 1.0]
+    """
+    b = [m.borders for m in table.meshes]
+    if not b:
+        return np.array([0.0, 1.0])
+    return np.union1d(np.concatenate(b), [0.0])
 
 
 class FAT:

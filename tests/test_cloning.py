@@ -158,14 +158,47 @@ def test_a_sliver_hanging_off_the_lip_corner_keeps_its_side():
     assert plain.tolist() == [OUTSIDE, UPPER, LOWER, UPPER, UPPER]
     got = lip_regions(uv, pts, triangles=tris, vertices=xyz)
     assert got[1:].tolist() == [UPPER, LOWER, UPPER, UPPER]
-    # through the corner the lower lip is nearer: without the rule the sliver goes there
-    through = lip_regions(uv, pts, triangles=tris, vertices=xyz, corner=0.0)
-    assert through[3:].tolist() == [LOWER, LOWER]
     # joined to the upper lip past the corner too, it is settled by the mesh as before
     joined = lip_regions(uv, pts, triangles=np.vstack([tris, [[3, 1, 4]]]), vertices=xyz)
     assert joined[3:].tolist() == [UPPER, UPPER]
     with_lower = lip_regions(uv, pts, triangles=np.vstack([tris, [[3, 2, 4]]]), vertices=xyz)
     assert with_lower[3:].tolist() == [LOWER, LOWER]
+
+
+def _lip_corner_mesh() -> tuple:
+    """(uv, xyz, triangles, points) of two lips meeting at the corner (0.3, 0): each lip
+    an outer row (uv y = +-0.06) and an inner row rolled 0.1 into the mouth, the lower
+    lip's inner row lying just ABOVE the mid line in 2D, as on a closed mouth."""
+    pts = {"2.4": (0.3, 0.0), "2.6": (0.15, 0.01), "2.2": (0, 0.01), "2.7": (-0.15, 0.01),
+           "2.5": (-0.3, 0.0), "2.8": (0.15, -0.01), "2.3": (0, -0.01), "2.9": (-0.15, -0.01),
+           "9.1": (0.2, 0.5), "9.2": (-0.2, 0.5), "2.11": (0.2, -0.5), "2.12": (-0.2, -0.5)}
+    xs = np.array([0.25, 0.15, 0.05])
+    rows = [(0.06, 0.0), (0.012, -0.1), (0.006, -0.1), (-0.06, 0.0)]   # (uv y, depth)
+    uv = [(0.3, 0.0)] + [(x, y) for y, _ in rows for x in xs]
+    xyz = np.array([(0.3, 0.0, 0.0)] + [(x, y, z) for y, z in rows for x in xs])
+    tris = [[0, 1, 4], [0, 7, 10]]
+    for a, b in ((1, 4), (7, 10)):                 # upper strip, lower strip
+        for k in range(2):
+            tris += [[a + k, a + k + 1, b + k], [a + k + 1, b + k + 1, b + k]]
+    return np.array(uv), xyz, np.array(tris), {k: np.array(v) for k, v in pts.items()}
+
+
+def test_a_lips_inner_surface_stays_with_its_lip_near_the_corner():
+    """The class behind the worst jawOpen errors on random ICT pairs: vertices of a lip's
+    inner surface near the corner lie on the other side of the mid line in 2D.  The
+    mesh says which lip they hang from; the other lip reaches them only round the
+    corner."""
+    uv, xyz, tris, pts = _lip_corner_mesh()
+    plain = lip_regions(uv, pts)
+    assert plain[7:10].tolist() == [UPPER] * 3            # the polygons get them wrong
+    got = lip_regions(uv, pts, triangles=tris, vertices=xyz)
+    assert got[1:7].tolist() == [UPPER] * 6
+    assert got[7:13].tolist() == [LOWER] * 6
+    # the same with the lips in the other order of vertices (no reliance on numbering)
+    order = np.r_[0, np.arange(12, 0, -1)]
+    back = np.argsort(order)
+    again = lip_regions(uv[order], pts, triangles=back[tris], vertices=xyz[order])
+    assert again[back].tolist() == got.tolist()
 
 
 def _other_lip_motion(source, target, **options) -> float:

@@ -112,13 +112,13 @@ def reference_head(*, face_width: float = 1.0, jaw: float = 1.0, nose: float = 1
     """Build the reference head.
 
     ``face_width``, ``jaw``, ``nose``, ``eye_spacing`` and ``mouth_width`` (each 0.8 to
-    1.25) change its proportions; ``resolution`` (0.5 to 3) the density of its meshes
+    1.25) change its proportions; ``resolution`` (0.5 to 4) the density of its meshes
     (the skin has about 11,000 triangles at 1); ``seed`` the jitter of the skin's
     background vertices (so another seed gives another triangulation of the same
     shape).  Deterministic: the same arguments give the same arrays.
     """
-    if not 0.5 <= float(resolution) <= 3.0:
-        raise ValueError(f"resolution = {resolution}: the reference head takes 0.5 to 3")
+    if not 0.5 <= float(resolution) <= 4.0:
+        raise ValueError(f"resolution = {resolution}: the reference head takes 0.5 to 4")
     d = Design(face_width, jaw, nose, eye_spacing, mouth_width)
     skin = build_skin(d, float(resolution), int(seed))
     V = skin.vertices

@@ -44,7 +44,8 @@ from ..fba.requirements import NOT_SURFACE
 from .alignment import align
 from .errors import CloneWarning
 from .skin import Skin, coarseness, mean_edge, mesh_groups
-from .surface import (REGISTRATION_FINE_SCALES, REGISTRATION_MEMBRANE, closest_points,
+from .surface import (REGISTRATION_FINE_SCALES, REGISTRATION_MEMBRANE, SPDFactoriser,
+                      closest_points,
                       feature_warp, loop_correspondence, neck_cut, register_surface,
                       surface_biharmonic)
 
@@ -264,7 +265,8 @@ def pin_neck(source: Skin, target: Skin, warped: np.ndarray) -> tuple:
 
 def register_skin(source: Skin, target: Skin, warped: np.ndarray, *,
                   membrane: float = REGISTRATION_MEMBRANE, scales: Optional[tuple] = None,
-                  loose_pins: Optional[float] = None) -> np.ndarray:
+                  loose_pins: Optional[float] = None,
+                  factorise: Optional[SPDFactoriser] = None) -> np.ndarray:
     """``warped`` with the target's main skin fitted onto the source's main skin
     (:func:`~mpeg4fba.cloning.surface.register_surface`, over ``scales``, by default
     its own), its feature points held; with ``loose_pins`` (a number, see
@@ -285,7 +287,8 @@ def register_skin(source: Skin, target: Skin, warped: np.ndarray, *,
     out[ft:ft + nt] = register_surface(
         target.normalised[ft:ft + nt], tris, warped[ft:ft + nt], pins,
         source.normalised[fs:fs + ns], source.face.meshes[source.main].triangles,
-        membrane=membrane, loose=loose, **({} if scales is None else {"scales": scales}))
+        membrane=membrane, loose=loose, factorise=factorise,
+        **({} if scales is None else {"scales": scales}))
     if loose is not None:
         out[ft + loose] = warped[ft + loose]
     return out
@@ -326,13 +329,15 @@ def surface_alignment(source: Skin, target: Skin, paper: Correspondence,
     pinned = False
     if options.neck:
         warped, pinned = pin_neck(source, target, warped)
+    factorise = SPDFactoriser()          # both fits solve on the same mesh
     if options.register:
-        warped = register(source, target, warped, membrane=options.membrane)
+        warped = register(source, target, warped, membrane=options.membrane,
+                          factorise=factorise)
     # the 2D positions (for the regions) from the stiffer fit, the surface points
     # from the finer one (see REGISTRATION_FINE_SCALES)
     surface_points = register(source, target, warped, membrane=options.membrane,
                               scales=REGISTRATION_FINE_SCALES,
-                              loose_pins=options.loose_pins) \
+                              loose_pins=options.loose_pins, factorise=factorise) \
         if options.register and options.refine else warped
     aligned, depth = onto_surface(source, target, warped, paper.aligned, paper.aligned_depth,
                                   options.by_mesh)

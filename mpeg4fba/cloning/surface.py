@@ -132,6 +132,9 @@ def closest_points(points: np.ndarray, vertices: np.ndarray, triangles: np.ndarr
     reach = np.zeros(len(V))
     np.maximum.at(reach, i, length)
     np.maximum.at(reach, j, length)
+    # likewise per triangle: no nearer than |point - centroid| - its farthest corner
+    centre = V[T].mean(axis=1)
+    radius = np.linalg.norm(V[T] - centre[:, None], axis=2).max(axis=1)
     flat = T.ravel()
     order = np.argsort(flat, kind="stable")
     counts = np.bincount(flat, minlength=len(V))
@@ -151,13 +154,18 @@ def closest_points(points: np.ndarray, vertices: np.ndarray, triangles: np.ndarr
         rows = np.repeat(active, cnt)
         pos = np.arange(rows.size) - np.repeat(np.cumsum(cnt) - cnt, cnt) + np.repeat(start[v], cnt)
         t = tri_of[pos]
+        hope = np.linalg.norm(P[rows] - centre[t], axis=1) - radius[t] <= best_c[rows]
+        rows, t = rows[hope], t[hope]
         b, d = point_triangle(P[rows], V[T[t]])
         cost = d + facing * (1 - (N[rows] * tn[t]).sum(1)) / 2 if cost_of_facing else d
-        # the best pair of each point
-        o = np.lexsort((cost, rows))
-        rows, t, b, d, cost = rows[o], t[o], b[o], d[o], cost[o]
-        first = np.ones(rows.size, dtype=bool)
-        first[1:] = rows[1:] != rows[:-1]
+        if not rows.size:
+            continue
+        # the best pair of each point (rows come grouped; the first of equal costs wins)
+        new = np.r_[True, rows[1:] != rows[:-1]]
+        group = np.cumsum(new) - 1
+        low = np.minimum.reduceat(cost, np.flatnonzero(new))
+        hit = np.flatnonzero(cost == low[group])
+        first = hit[np.r_[True, group[hit][1:] != group[hit][:-1]]]
         rows, t, b, d, cost = rows[first], t[first], b[first], d[first], cost[first]
         better = cost < best_c[rows]
         r = rows[better]
@@ -428,12 +436,15 @@ def register_surface(rest: np.ndarray, triangles: np.ndarray, start: np.ndarray,
                      surface_triangles: np.ndarray, *,
                      scales: tuple = REGISTRATION_SCALES, iterations: int = 4,
                      membrane: float = REGISTRATION_MEMBRANE,
-                     loose: Optional[np.ndarray] = None) -> np.ndarray:
+                     loose: Optional[np.ndarray] = None,
+                     factorise: Optional[SPDFactoriser] = None) -> np.ndarray:
     """The vertices of a mesh (``rest`` (n, 3), ``triangles``) moved from ``start`` onto a
     surface, keeping the rows ``fixed`` where ``start`` has them: a non-rigid ICP.
     Rows of ``fixed`` also in ``loose`` are held loosely instead: pulled towards their
     ``start`` with the weight every other vertex has towards the surface (its area),
     so the fit moves them as much as it moves their neighbours off the surface.
+    ``factorise``: an :class:`SPDFactoriser` to share with other fits of the same mesh
+    (its fill-reducing order is found once).
 
     For each length scale l of ``scales`` in turn, ``iterations`` times: every vertex's
     nearest point on the surface is found, and the positions X minimise
@@ -484,7 +495,7 @@ def register_surface(rest: np.ndarray, triangles: np.ndarray, start: np.ndarray,
     normals = vertex_normals(SV, ST)[on]
     bend, L, area = _bilaplacian(R, T)
     m = area[free]
-    factorise = SPDFactoriser()
+    factorise = SPDFactoriser() if factorise is None else factorise
     for scale in scales:
         # the energy of D = X - rest at this scale, l**4 (thin plate) + l**2 (membrane)
         E = (float(scale) ** 4 * bend + float(membrane) * float(scale) ** 2 * L).tocsr()
@@ -593,14 +604,17 @@ def surface_weights(points: np.ndarray, vertices: np.ndarray, triangles: np.ndar
         S = (q[:, None] + r[filtered, None, None] * offset).reshape(-1, 3)
         cur = np.repeat(t[filtered], samples)
         near = triangle_neighbours(T)
+        walking = np.arange(len(S))           # samples still crossing edges
         for _ in range(int(steps)):
-            bary = _plane_barycentric(S, V[T[cur]])
+            c = cur[walking]
+            bary = _plane_barycentric(S[walking], V[T[c]])
             worst = bary.argmin(axis=1)
-            nxt = near[cur, worst]
-            move = (bary[np.arange(len(S)), worst] < -1e-12) & (nxt >= 0)
+            nxt = near[c, worst]
+            move = (bary[np.arange(len(walking)), worst] < -1e-12) & (nxt >= 0)
             if not move.any():
                 break
-            cur[move] = nxt[move]
+            walking = walking[move]
+            cur[walking] = nxt[move]
         bary = np.clip(_plane_barycentric(S, V[T[cur]]), 0.0, None)
         total = bary.sum(axis=1, keepdims=True)
         bary = np.where(total > 0, bary / np.where(total > 0, total, 1), 1.0 / 3.0)

@@ -440,10 +440,12 @@ def test_feature_points_are_held_loosely_only_on_a_coarse_target(source, target)
 
     held = fit(c)
     assert np.array_equal(fit(c, loose_pins=c.loose_pins), held)
-    assert np.array_equal(c.surface_points, held)     # ... so no point is loosened
+    # ... so no point is loosened (equal up to round-off: the cloner's fits share one
+    # fill-reducing order, this lone fit finds its own)
+    assert np.allclose(c.surface_points, held, rtol=0, atol=1e-10)
     every, _ = quiet(FacialMotionCloner, source, target, loose_pins=0.0)   # every point is
     loose = fit(every, loose_pins=every.loose_pins)
-    assert np.array_equal(every.surface_points, loose)
+    assert np.allclose(every.surface_points, loose, rtol=0, atol=1e-10)
     rows = first + c.tgt.main_point_rows()
     assert np.array_equal(loose[rows], stiff.surface_points[rows])   # back in place
     moved = np.linalg.norm(loose - held, axis=1)

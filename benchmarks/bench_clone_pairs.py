@@ -94,14 +94,22 @@ class PairResult:
     region_max: dict = field(default_factory=dict)
     region_mean: dict = field(default_factory=dict)
     worst: dict = field(default_factory=dict)   # where the largest error is
+    region_worst: dict = field(default_factory=dict)   # the same per region
 
 
 def draw_pairs(seed: int, n: int) -> list:
-    """``n`` (source seed, target seed, decimation fraction) triples from ``seed``."""
+    """``n`` (source seed, target seed, decimation fraction) triples from ``seed``, drawn
+    one pair at a time (the first k pairs of a draw do not depend on ``n``), every
+    identity seed distinct."""
     rng = np.random.default_rng(seed)
-    seeds = rng.choice(np.arange(1000, 1_000_000), size=2 * n, replace=False).reshape(n, 2)
-    fractions = rng.uniform(*FRACTION, size=n)
-    return [(int(a), int(b), float(f)) for (a, b), f in zip(seeds, fractions)]
+    out, used = [], set()
+    while len(out) < n:
+        a, b = (int(x) for x in rng.integers(1000, 1_000_000, size=2))
+        fraction = float(rng.uniform(*FRACTION))
+        if a != b and not {a, b} & used:
+            used |= {a, b}
+            out.append((a, b, fraction))
+    return out
 
 
 # -- the decimated target and its truth ----------------------------------------------------------
@@ -217,12 +225,18 @@ def measure(data, a: int, b: int, kind: str, fraction: float, options: dict,
     flips = max(ict.flipped_triangles(skin.vertices, skin.vertices + got[:, k], skin.triangles)
                 - ict.flipped_triangles(skin.vertices, skin.vertices + want[:, k], skin.triangles)
                 for k in range(len(names)))
-    i, k = np.unravel_index(np.argmax(e), e.shape)
-    v = int(front[i])
-    where = next(r for r in REGIONS if v in set(rows[r].tolist()))
-    worst = {"vertex": v, "expression": names[k], "region": where, "error": float(e[i, k]),
-             "true_motion": float(np.linalg.norm(want[v, k]) / iod * 100),
-             "cloned_motion": float(np.linalg.norm(got[v, k]) / iod * 100)}
+    def where(v: int, k: int, region: str) -> dict:
+        return {"vertex": v, "expression": names[k], "region": region,
+                "error": float(err[v, k]),
+                "true_motion": float(np.linalg.norm(want[v, k]) / iod * 100),
+                "cloned_motion": float(np.linalg.norm(got[v, k]) / iod * 100)}
+
+    region_worst = {}
+    for r in REGIONS:
+        if len(rows[r]):
+            i, k = np.unravel_index(np.argmax(err[rows[r]]), (len(rows[r]), len(names)))
+            region_worst[r] = where(int(rows[r][i]), int(k), r)
+    worst = max(region_worst.values(), key=lambda w: w["error"])
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         out = cloner.clone()
@@ -235,7 +249,8 @@ def measure(data, a: int, b: int, kind: str, fraction: float, options: dict,
         a, b, kind, int(n), setup, float(e.mean(axis=0).mean()), float(np.percentile(e, 95)),
         float(e.max()), int(flips), abs(recovered - true_deg),
         {r: float(err[rows[r]].max()) if len(rows[r]) else 0.0 for r in REGIONS},
-        {r: float(err[rows[r]].mean()) if len(rows[r]) else 0.0 for r in REGIONS}, worst)
+        {r: float(err[rows[r]].mean()) if len(rows[r]) else 0.0 for r in REGIONS}, worst,
+        region_worst)
 
 
 def _job(args) -> list:

@@ -13,8 +13,8 @@ import numpy as np
 import pytest
 
 from benchmarks import ict
-from benchmarks.bench_clone_ict import EXPRESSIONS, evaluate, rigid_jaw, source_motion
-from mpeg4fba.cloning import LOWER, UPPER, FacialMotionCloner
+from benchmarks.bench_clone_ict import evaluate, rigid_jaw, source_motion
+from mpeg4fba.cloning import UPPER, FacialMotionCloner
 
 
 @pytest.fixture(scope="module")
@@ -48,23 +48,6 @@ def test_a_sliver_off_the_lip_corner_stays_on_its_lip(data):
     res = evaluate(c, source, target, ["jawOpen"], data)["jawOpen"]
     assert res["all"][2] < 2.5, res["all"]          # was 24.05 % IOD; now 1.65
     assert res["flipped"][0] <= res["flipped"][1]
-
-
-def test_decimated_pair_meets_the_goals(data):
-    """ICT 1 -> 2, decimated target, scaling off (the issue's table): mean <= 0.10 %
-    IOD, largest error <= 2.0 (1.91; 2.36 before the feature points were held loosely
-    on a coarse target) and no more flipped triangles than the truth over the eight
-    expressions."""
-    source, target, c = _clone(data, 1, 2)
-    res = evaluate(c, source, target, list(EXPRESSIONS), data)
-    means = [row["all"][0] for row in res.values()]
-    assert np.mean(means) <= 0.10
-    assert max(row["flipped"][0] - row["flipped"][1] for row in res.values()) <= 0
-    assert max(row["all"][2] for row in res.values()) <= 2.0
-    # the lip regions of the two lips are both present on the target
-    first, n = c.target_skin["Skin"]
-    labels = c.target_regions[first:first + n]
-    assert (labels == UPPER).sum() > 20 and (labels == LOWER).sum() > 20
 
 
 def test_a_coarse_target_holds_its_feature_points_loosely(data):

@@ -1,0 +1,88 @@
+"""Facial Motion Cloning on random ICT identity pairs (``benchmarks/bench_clone_pairs.py``):
+the first pairs of the benchmark's regression draw, onto the full target and onto a copy
+decimated by quadric edge collapse, scaling off.
+
+Needs ``../shared/data/ict-facekit`` (skips without it), read in place.  The guards are
+the figures these pairs give today with some room; issue 19's goals, not met yet, are
+strict xfails, so meeting one fails the suite until the goal becomes a guard.
+"""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from benchmarks import bench_clone_pairs as bp
+
+#: How many pairs of the regression draw the suite clones (each onto two targets).
+PAIRS = 3
+
+
+@pytest.fixture(scope="module")
+def results(ict_data) -> list:
+    return [bp.measure(ict_data, a, b, kind, fraction, {})
+            for a, b, fraction in bp.draw_pairs(bp.REGRESSION_SEED, PAIRS) for kind in bp.KINDS]
+
+
+def test_the_draw_is_fixed_and_distinct():
+    draw = bp.draw_pairs(bp.REGRESSION_SEED, 20)
+    assert draw[:PAIRS] == bp.draw_pairs(bp.REGRESSION_SEED, PAIRS)
+    seeds = [s for a, b, _ in draw for s in (a, b)]
+    assert len(set(seeds)) == len(seeds)
+    assert all(bp.FRACTION[0] <= f <= bp.FRACTION[1] for _, _, f in draw)
+    assert bp.draw_pairs(bp.REGRESSION_SEED + 1, 3) != draw[:3]
+
+
+def test_the_decimated_targets_are_another_topology_at_the_asked_fraction(ict_data):
+    from benchmarks import ict
+    vertices = ict.identity(ict_data, 5)
+    full = ict.ict_face(ict_data, vertices)
+    face, truth = bp.quadric_target(ict_data, vertices, 0.3, "decimated")
+    n, n0 = len(face.meshes["Skin"].vertices), len(full.meshes["Skin"].vertices)
+    assert 0.25 <= n / n0 <= 0.35
+    assert truth.shape == (n, n0)
+    assert np.allclose(np.asarray(truth.sum(axis=1)).ravel(), 1.0)
+    # the feature points sit on vertices of the new skin, where the original ones were
+    for k, (mesh, i) in face.points.vertices.items():
+        if mesh == "Skin":
+            assert np.allclose(face.meshes["Skin"].vertices[i], full.points[k])
+    # the truth of a vertex is a point of the original skin near it
+    near = truth @ full.meshes["Skin"].vertices
+    iod = np.linalg.norm(full.points["3.5"] - full.points["3.6"])
+    assert np.linalg.norm(near - face.meshes["Skin"].vertices, axis=1).max() < 0.05 * iod
+
+
+def test_random_pairs_hold_todays_figures(results):
+    """Guards: what the regression pairs give today, with some room (means 0.049 / 0.070
+    / 0.039 % of the eye distance full, 0.043 / 0.061 / 0.033 decimated; largest errors
+    6.5 / 12.2 / 3.7 full, 7.2 / 5.8 / 6.5 decimated, all at the lips or the throat under
+    jawOpen; at most 19 flips beyond the truth; lower teeth within 1.23 degrees)."""
+    for r in results:
+        assert r.mean <= 0.08, r
+        assert r.max <= 15.0, r
+        assert r.flipped <= 25, r
+        assert r.teeth_deg <= 1.5, r
+        assert r.region_max["brows"] <= 0.5, r
+
+
+@pytest.mark.xfail(strict=True, reason="issue 19's goal (largest error <= 4 % of the eye "
+                   "distance on every pair) is not met: lip corners under jawOpen")
+def test_goal_largest_error(results):
+    assert max(r.max for r in results) <= bp.GOALS["max_worst"]
+
+
+@pytest.mark.xfail(strict=True, reason="issue 19's goal (no more than 2 flipped triangles "
+                   "beyond the truth) is not met on full targets")
+def test_goal_flipped_triangles(results):
+    assert max(r.flipped for r in results) <= bp.GOALS["flipped"]
+
+
+@pytest.mark.xfail(strict=True, reason="issue 19's goal (lower teeth within 1 degree) is "
+                   "missed on one of the pairs (1.23 degrees)")
+def test_goal_lower_teeth(results):
+    assert max(r.teeth_deg for r in results) <= bp.GOALS["teeth_deg"]
+
+
+@pytest.mark.xfail(strict=True, reason="issue 19's goal (mean <= 0.06 % of the eye "
+                   "distance on every pair) is missed on one full target (0.070)")
+def test_goal_mean(results):
+    assert max(r.mean for r in results) <= bp.GOALS["mean"]

@@ -43,9 +43,7 @@ belongs along a surface.
 Variants (all but ``--quick``): the default cloner (surface alignment: warp, neck cuts
 pinned, registration, weights on the surface); without the registration; its thin plate
 alone (``membrane=0``); without the facing term of the surface weights (``facing=0``);
-without the finer fit (``refine=False``); feature points held fast in the finer fit
-on a coarse target too (``loose_pins=inf``);
-without the neck pinning; the surface alignment with the paper's 2D interpolation; the warp and
+without the finer fit (``refine=False``); without the neck pinning; the surface alignment with the paper's 2D interpolation; the warp and
 closest point alone with the 2D interpolation (the default before the registration); the
 paper's 2D
 alignment and interpolation ``alignment="paper"``, also with its overlap rule
@@ -85,7 +83,6 @@ VARIANTS = {
     "membrane=0": {"membrane": 0.0},
     "facing=0": {"facing": 0.0},
     "refine=False": {"refine": False},
-    "loose_pins=inf": {"loose_pins": float("inf")},
     "neck=False": {"neck": False},
     "interpolation=2d": {"interpolation": "2d"},
     "warp only, 2d": {"register": False, "neck": False, "interpolation": "2d"},

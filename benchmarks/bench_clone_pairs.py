@@ -72,6 +72,9 @@ REGIONS = ("mouth", "eyes", "brows", "neck", "rest")
 KINDS = ("full", "decimated")
 #: Fraction of the skin's vertices the decimated copy keeps, drawn per pair.
 FRACTION = (0.25, 0.35)
+#: Radius (% of the eye distance) over which the report gives the true motion's range
+#: round each worst vertex: how much an error that small in where it is taken to be costs.
+SPREAD_RADIUS = 1.0
 #: Issue 19's goals (scaling off): median and worst over pairs of the per-pair largest
 #: error (% of the eye distance), the largest per-pair mean, flipped triangles beyond the
 #: truth per pair and expression, the lower teeth's rotation error (degrees).
@@ -212,7 +215,8 @@ def measure(data, a: int, b: int, kind: str, fraction: float, options: dict,
     mapped = cloner.map_skin(_source_motion(cloner, A, names, data))
     first, n = cloner.target_skin["Skin"]
     got = mapped[first:first + n].reshape(n, len(names), 3)
-    full = ict.split_deltas(ict.ict_face(data, Vb), data.expression_deltas(names))["Skin"]
+    original = ict.ict_face(data, Vb)
+    full = ict.split_deltas(original, data.expression_deltas(names))["Skin"]
     want = np.moveaxis(full, 0, 1)                                       # (n0, K, 3)
     if truth is not None:
         want = (truth @ want.reshape(len(want), -1)).reshape(n, len(names), 3)
@@ -226,10 +230,17 @@ def measure(data, a: int, b: int, kind: str, fraction: float, options: dict,
                 - ict.flipped_triangles(skin.vertices, skin.vertices + want[:, k], skin.triangles)
                 for k in range(len(names)))
     def where(v: int, k: int, region: str) -> dict:
+        # how steep the truth is there: the range of the true motion over the original
+        # skin within SPREAD_RADIUS of the vertex (what an error of that size in where the
+        # vertex is taken to be can cost)
+        near = np.linalg.norm(original.meshes["Skin"].vertices - skin.vertices[v], axis=1) \
+            < SPREAD_RADIUS / 100 * iod
+        size = np.linalg.norm(full[k, near], axis=1) / iod * 100 if near.any() else [0.0]
         return {"vertex": v, "expression": names[k], "region": region,
                 "error": float(err[v, k]),
                 "true_motion": float(np.linalg.norm(want[v, k]) / iod * 100),
-                "cloned_motion": float(np.linalg.norm(got[v, k]) / iod * 100)}
+                "cloned_motion": float(np.linalg.norm(got[v, k]) / iod * 100),
+                "spread": float(np.max(size) - np.min(size))}
 
     region_worst = {}
     for r in REGIONS:
@@ -299,14 +310,17 @@ def report(results: list, title: str) -> str:
     """The whole report as Markdown."""
     out = [f"# {title}", "", "Per pair (% of the target's eye distance; flipped: most "
            "triangles flipped beyond the truth in one expression; teeth: degrees off the "
-           "true lower-teeth rotation under jawOpen):", "",
+           "true lower-teeth rotation under jawOpen; worst at: the region and expression of "
+           "the largest error, the true and cloned motion there and the range of the true "
+           f"motion within {SPREAD_RADIUS:g} % of the eye distance of it):", "",
            "| pair | kind | vertices | set-up s | mean | p95 | max | worst at | flipped | "
            "teeth |", "|---|---|---:|---:|---:|---:|---:|---|---:|---:|"]
     for r in results:
         w = r.worst
         out.append(f"| {r.source} → {r.target} | {r.kind} | {r.vertices:,} | {r.setup_s:.1f} | "
                    f"{r.mean:.3f} | {r.p95:.3f} | {r.max:.2f} | {w['region']} {w['expression']} "
-                   f"(true {w['true_motion']:.1f}, cloned {w['cloned_motion']:.1f}) | "
+                   f"(true {w['true_motion']:.1f}, cloned {w['cloned_motion']:.1f}; "
+                   f"{w.get('spread', float('nan')):.1f} within {SPREAD_RADIUS:g}) | "
                    f"{r.flipped} | {r.teeth_deg:.2f} |")
     s = summarise(results)
     out += ["", "Over pairs (median / worst):", "",

@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from benchmarks import ict
-from benchmarks.bench_clone_ict import evaluate, rigid_jaw, source_motion
+from benchmarks.bench_clone_ict import evaluate, rigid_jaw
 from mpeg4fba.cloning import UPPER, FacialMotionCloner
 
 
@@ -48,25 +48,6 @@ def test_a_sliver_off_the_lip_corner_stays_on_its_lip(data):
     res = evaluate(c, source, target, ["jawOpen"], data)["jawOpen"]
     assert res["all"][2] < 2.5, res["all"]          # was 24.05 % IOD; now 1.65
     assert res["flipped"][0] <= res["flipped"][1]
-
-
-def test_a_coarse_target_holds_its_feature_points_loosely(data):
-    """Decimated 1 -> 2: ICT 6070, 4 % of the eye distance behind the lip corner 2.4
-    and joined to it by one sliver, was dragged along by the held corner in the finer
-    fit (2.36 % IOD off under jawOpen); held loosely (LOOSE_PIN_RESOLUTION) it is 1.91."""
-    def error(c, source, target):
-        full = data.expression_deltas(["jawOpen"])
-        moved = c.map_skin(source_motion(c, source, ict.split_deltas(source, full)))
-        row = _row(target, c.target_skin, 6070)
-        truth = ict.split_deltas(target, full)["Skin"][0]
-        first, _ = c.target_skin["Skin"]
-        iod = float(np.linalg.norm(target.points["3.5"] - target.points["3.6"]))
-        return float(np.linalg.norm(moved[row] - truth[row - first])) / iod * 100
-
-    source, target, c = _clone(data, 1, 2)
-    loose = error(c, source, target)
-    _, _, held = _clone(data, 1, 2, loose_pins=np.inf)
-    assert loose < 2.0 < error(held, source, target)
 
 
 @pytest.mark.parametrize("decimated", [False, True])

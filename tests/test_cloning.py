@@ -353,15 +353,13 @@ def test_options_are_checked(source, target):
             FacialMotionCloner(source, target, membrane=bad)
         with pytest.raises(ValueError, match="facing must be a finite number"):
             FacialMotionCloner(source, target, facing=bad)
-        with pytest.raises(ValueError, match="loose_pins must be a number"):
-            FacialMotionCloner(source, target, loose_pins=bad)
 
 
 @pytest.mark.parametrize("options", [dict(positions="regional"), dict(triangulation="delaunay"),
                                      dict(scale_motion=False), dict(interpolation="2d"),
                                      dict(register=False), dict(alignment="paper"),
                                      dict(membrane=0.0), dict(facing=0.0),
-                                     dict(refine=False), dict(loose_pins=0.0)])
+                                     dict(refine=False)])
 def test_variants_still_clone_everything(source, target, options):
     out, _ = quiet(clone, source, target, **options)
     assert len(out.fat) == len(source.fat)
@@ -418,38 +416,6 @@ def test_the_finer_fit_moves_the_surface_points_and_keeps_the_regions(source, ta
     a, _ = quiet(FacialMotionCloner, source, target, register=False)
     b, _ = quiet(FacialMotionCloner, source, target, register=False, refine=False)
     assert np.array_equal(a.surface_points, b.surface_points)
-
-
-def test_feature_points_are_held_loosely_only_on_a_coarse_target(source, target):
-    """In the finer fit a feature point is held loosely where the target's mesh is much
-    coarser than the source's (LOOSE_PIN_RESOLUTION), and put back in place at the end."""
-    from mpeg4fba.cloning.correspondence import register_skin
-    from mpeg4fba.cloning.skin import coarseness, mean_edge
-    from mpeg4fba.cloning.surface import REGISTRATION_FINE_SCALES as FINE
-    c, _ = quiet(FacialMotionCloner, source, target)
-    stiff, _ = quiet(FacialMotionCloner, source, target, refine=False)
-    first, n = c.tgt.offsets[c.tgt.main]
-    ratio, _ = coarseness(c.src, mean_edge(c.tgt.normalised[first:first + n],
-                                           target.meshes[c.tgt.main].triangles),
-                          stiff.surface_points[first:first + n])
-    assert 0.5 < np.median(ratio) < 2        # two meshes of about the same resolution ...
-
-    def fit(cloner, **loose):
-        return register_skin(cloner.src, cloner.tgt, stiff.surface_points,
-                             membrane=cloner.membrane, scales=FINE, **loose)
-
-    held = fit(c)
-    assert np.array_equal(fit(c, loose_pins=c.loose_pins), held)
-    # ... so no point is loosened (equal up to round-off: the cloner's fits share one
-    # fill-reducing order, this lone fit finds its own)
-    assert np.allclose(c.surface_points, held, rtol=0, atol=1e-10)
-    every, _ = quiet(FacialMotionCloner, source, target, loose_pins=0.0)   # every point is
-    loose = fit(every, loose_pins=every.loose_pins)
-    assert np.allclose(every.surface_points, loose, rtol=0, atol=1e-10)
-    rows = first + c.tgt.main_point_rows()
-    assert np.array_equal(loose[rows], stiff.surface_points[rows])   # back in place
-    moved = np.linalg.norm(loose - held, axis=1)
-    assert moved.max() > 1e-4 and np.median(moved) < 1e-3
 
 
 def test_a_correspondence_stands_in_for_its_step(source, target):

@@ -43,13 +43,13 @@ from ..fba.featurepoints import point_order
 from ..fba.requirements import NOT_SURFACE
 from .alignment import align
 from .errors import CloneWarning
-from .skin import Skin, coarseness, mean_edge, mesh_groups
+from .skin import Skin, mesh_groups
 from .surface import (REGISTRATION_FINE_SCALES, REGISTRATION_MEMBRANE, SPDFactoriser,
                       closest_points,
                       feature_warp, loop_correspondence, neck_cut, register_surface,
                       surface_biharmonic)
 
-__all__ = ["ALIGNMENTS", "NECK_RATIO", "LOOSE_PIN_RESOLUTION", "DERIVE_DISTANCE",
+__all__ = ["ALIGNMENTS", "NECK_RATIO", "DERIVE_DISTANCE",
            "AlignOptions", "Correspondence", "correspond", "paper_alignment",
            "surface_alignment", "warp_skin", "pin_neck", "register_skin", "onto_surface",
            "derive_points"]
@@ -75,9 +75,7 @@ __all__ = ["ALIGNMENTS", "NECK_RATIO", "LOOSE_PIN_RESOLUTION", "DERIVE_DISTANCE"
 #:    group), whose 2D position is its aligned position for the lip and eyelid regions;
 #: 5. with ``register=True`` and ``refine=True``, the fit goes on to a sixty-fourth of
 #:    the face (:data:`~mpeg4fba.cloning.surface.REGISTRATION_FINE_SCALES`), feature
-#:    points where the target is much coarser than the source held loosely
-#:    (:data:`LOOSE_PIN_RESOLUTION`), and its result is the surface points the surface
-#:    weights are taken at; the regions stay with step 4, since a vertex following the
+#:    points held, and its result is the surface points the surface weights are taken at; the regions stay with step 4, since a vertex following the
 #:    source's facets can cross the mouth's mid line.
 #:
 #: 2D interpolation between feature points can't see how a surface seen edge-on by the
@@ -109,25 +107,16 @@ ALIGNMENTS = ("surface", "paper")
 #: without it, it cuts the throat's errors (ICT 1 -> 2: largest 4.8 -> 2.9 %).
 NECK_RATIO = 2.0
 
-#: How much coarser than the source (as for
-#: :data:`~mpeg4fba.cloning.weights.FACING_RESOLUTION`) the target's mesh
-#: must be round a feature point for the point to be held loosely in the finer fit
-#: (``refine=True``): pulled to its place on the source like any vertex to the surface,
-#: then put back there exactly.  A held point ties its neighbours to it over an edge of
-#: the target, and on a coarse mesh that edge is longer than the scales the finer fit
-#: works at: on ICT 1 -> 2 decimated, a vertex 4 % of the eye distance behind the left
-#: lip corner (2.4), joined to it by one sliver, was dragged along with it, 1.2 % IOD
-#: from its true place (1.0 loosely, 0.75 on the full mesh) and 2.36 % IOD off under
-#: jawOpen (1.91 loosely).  On a mesh as fine as the source's, holding the points is
-#: right: loosened there, the lip corners' neighbours slide 0.7 % IOD along the lips
-#: (1 -> 2 onto the full mesh: largest error 2.56 -> 7.25).  On six ICT pairs
-#: (``benchmarks/bench_clone_ict.py --pairs``) the decimated targets' points are 1.2 to
-#: 24 times as coarse as the source's (medians 3.1 to 3.7 on 1 -> 2, 3 -> 4, 5 -> 6),
-#: the full meshes' 0.6 to 1.5 times.  Loosening above 2 takes the decimated targets'
-#: median of the largest errors from 2.71 to 2.49 % IOD, errors over 2 % from 76 to 74
-#: and flips from 3 to 2, and leaves the full meshes as they were (above 1.5: the same;
-#: above 3: a median of 2.63).
-LOOSE_PIN_RESOLUTION = 2.0
+# The finer fit (step 5) holds every feature point fast, also where the target's mesh
+# is much coarser than the source's.  Holding such points loosely (pulled to their
+# place like any vertex to the surface, put back at the end; an option, ``loose_pins``,
+# once chosen on ICT 1 -> 2) did not earn its place on random ICT pairs
+# (``benchmarks/bench_clone_pairs.py``, four draws of 20 pairs: seeds 1919, 2027, 2028,
+# 2029): onto the full targets it changed nothing; onto the decimated ones, held fast,
+# the median of the per-pair largest errors is 6.20 -> 5.84, 7.19 -> 8.44, 9.06 -> 7.77
+# and 11.4 -> 7.72 % of the eye distance, the worst pair's 13.4 -> 11.8, 19.8 -> 18.3,
+# 13.7 -> 15.2 and 15.7 -> 16.3, the worst mean lower on all four (0.079 -> 0.078,
+# 0.086 -> 0.084, 0.081 -> 0.076, 0.095 -> 0.089), flipped triangles (median) no more.
 
 #: How near (normalised space, eye separation 1) the mapping must place some target skin
 #: vertex to a source feature point for that vertex to become the target's point when
@@ -159,8 +148,6 @@ class AlignOptions:
     membrane : float
         The fit's membrane term against its thin plate
         (:data:`~mpeg4fba.cloning.surface.REGISTRATION_MEMBRANE`).
-    loose_pins : float
-        :data:`LOOSE_PIN_RESOLUTION` (``inf``: every feature point held fast).
     by_mesh : bool
         Closest points on the source mesh that is each target mesh's counterpart
         (:func:`~mpeg4fba.cloning.skin.mesh_groups`).
@@ -172,7 +159,6 @@ class AlignOptions:
     register: bool = True
     refine: bool = True
     membrane: float = REGISTRATION_MEMBRANE
-    loose_pins: float = LOOSE_PIN_RESOLUTION
     by_mesh: bool = True
 
 
@@ -265,32 +251,22 @@ def pin_neck(source: Skin, target: Skin, warped: np.ndarray) -> tuple:
 
 def register_skin(source: Skin, target: Skin, warped: np.ndarray, *,
                   membrane: float = REGISTRATION_MEMBRANE, scales: Optional[tuple] = None,
-                  loose_pins: Optional[float] = None,
                   factorise: Optional[SPDFactoriser] = None) -> np.ndarray:
     """``warped`` with the target's main skin fitted onto the source's main skin
     (:func:`~mpeg4fba.cloning.surface.register_surface`, over ``scales``, by default
-    its own), its feature points held; with ``loose_pins`` (a number, see
-    :data:`LOOSE_PIN_RESOLUTION`), those where the target is that much coarser than the
-    source are held loosely during the fit and put back at the end."""
+    its own), its feature points held."""
     if source.main is None or target.main is None:
         return warped
     ft, nt = target.offsets[target.main]
     fs, ns = source.offsets[source.main]
     tris = target.face.meshes[target.main].triangles
     pins = target.main_point_rows()
-    loose = None
-    if loose_pins is not None and len(pins):
-        edges = mean_edge(target.normalised[ft:ft + nt], tris)[pins]
-        ratio, _ = coarseness(source, edges, warped[ft + pins])
-        loose = pins[ratio > loose_pins]
     out = warped.copy()
     out[ft:ft + nt] = register_surface(
         target.normalised[ft:ft + nt], tris, warped[ft:ft + nt], pins,
         source.normalised[fs:fs + ns], source.face.meshes[source.main].triangles,
-        membrane=membrane, loose=loose, factorise=factorise,
+        membrane=membrane, factorise=factorise,
         **({} if scales is None else {"scales": scales}))
-    if loose is not None:
-        out[ft + loose] = warped[ft + loose]
     return out
 
 
@@ -336,8 +312,7 @@ def surface_alignment(source: Skin, target: Skin, paper: Correspondence,
     # the 2D positions (for the regions) from the stiffer fit, the surface points
     # from the finer one (see REGISTRATION_FINE_SCALES)
     surface_points = register(source, target, warped, membrane=options.membrane,
-                              scales=REGISTRATION_FINE_SCALES,
-                              loose_pins=options.loose_pins, factorise=factorise) \
+                              scales=REGISTRATION_FINE_SCALES, factorise=factorise) \
         if options.register and options.refine else warped
     aligned, depth = onto_surface(source, target, warped, paper.aligned, paper.aligned_depth,
                                   options.by_mesh)

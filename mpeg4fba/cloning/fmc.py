@@ -71,7 +71,7 @@ from ..fba.fat import FAT, FaceDefTable, table_borders
 from ..fba.featurepoints import FeaturePointSet, point_order
 from ..fba.requirements import fap_points, required_points
 from .checks import check_placement
-from .correspondence import (ALIGNMENTS, DERIVE_DISTANCE, LOOSE_PIN_RESOLUTION, NECK_RATIO,
+from .correspondence import (ALIGNMENTS, DERIVE_DISTANCE, NECK_RATIO,
                              AlignOptions, Correspondence, correspond, derive_points)
 from .errors import CloneWarning, check_choice
 from .lips import LIPS, SLITS
@@ -88,7 +88,7 @@ from .weights import (FACING, FACING_RESOLUTION, INTERPOLATIONS, OUTSIDE_RULES, 
 
 __all__ = ["clone", "FacialMotionCloner", "CloneWarning", "required_points_missing",
            "OVERLAP_RULES", "OUTSIDE_RULES", "METHODS", "ALIGNMENTS", "NECK_RATIO",
-           "INTERPOLATIONS", "FACING", "FACING_RESOLUTION", "LOOSE_PIN_RESOLUTION",
+           "INTERPOLATIONS", "FACING", "FACING_RESOLUTION",
            "DERIVE_DISTANCE", "visible_triangles"]
 
 
@@ -146,10 +146,6 @@ class FacialMotionCloner:
     refine : bool
         Go on to :data:`~mpeg4fba.cloning.surface.REGISTRATION_FINE_SCALES` for the
         surface points, the regions staying with the stiffer fit.
-    loose_pins : float
-        How much coarser than the source the target must be round a feature point for it
-        to be held loosely in the finer fit (:data:`LOOSE_PIN_RESOLUTION`), ``inf`` to hold
-        them all fast.
     correspondence : Correspondence or callable, optional
         In place of the correspondence step
         (:func:`~mpeg4fba.cloning.correspondence.correspond`): its record, or a function
@@ -179,7 +175,7 @@ class FacialMotionCloner:
                  by_mesh: bool = True, alignment: str = "surface", neck: bool = True,
                  register: bool = True, interpolation: Optional[str] = None,
                  membrane: float = REGISTRATION_MEMBRANE, facing: float = FACING,
-                 refine: bool = True, loose_pins: float = LOOSE_PIN_RESOLUTION,
+                 refine: bool = True,
                  correspondence: Union[Correspondence, Callable[..., Correspondence],
                                        None] = None):
         # 0. the points, the options of the 2D interpolation, the placement
@@ -241,12 +237,8 @@ class FacialMotionCloner:
         self.facing = float(facing)
         if not np.isfinite(self.facing) or self.facing < 0:
             raise ValueError(f"facing must be a finite number >= 0, not {facing!r}")
-        self.loose_pins = float(loose_pins)
-        if np.isnan(self.loose_pins) or self.loose_pins < 0:
-            raise ValueError(f"loose_pins must be a number >= 0 (inf: never), not {loose_pins!r}")
         self.align_options = AlignOptions(triangulation, alignment, self.neck, self.register,
-                                          self.refine, self.membrane, self.loose_pins,
-                                          self.by_mesh)
+                                          self.refine, self.membrane, self.by_mesh)
         self.slits = (LIPS,) * bool(lips) + SLITS[1:] * bool(eyelids)
         self.weight_options = WeightOptions(support, samples, interpolation, overlap, outside,
                                             self.facing, self.slits, self.by_mesh)

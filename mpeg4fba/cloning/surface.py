@@ -43,8 +43,7 @@ REGISTRATION_SCALES = (1.0, 0.5, 0.25, 0.125, 0.0625)
 #: 78 -> 76 and 2.83 -> 2.71, for a tenth more set-up (0.45 of 5.3 s on the
 #: 30,000-vertex reference heads, ``benchmarks/bench_clone.py``).  Going on to 1/128
 #: and 1/256 moves the worst vertex of the decimated 1 -> 2 (a mouth corner) only from
-#: 2.36 to 2.28 % IOD (feature points held fast; the cloner holds them loosely on a
-#: coarse target, :data:`~mpeg4fba.cloning.fmc.LOOSE_PIN_RESOLUTION`).
+#: 2.36 to 2.28 % IOD.
 REGISTRATION_FINE_SCALES = (0.03125, 0.015625)
 #: The weight of the membrane term of :func:`register_surface` against its thin plate.
 #: Measured on six ICT identity pairs (``benchmarks/bench_clone_ict.py --pairs``): 0.3,
@@ -436,13 +435,9 @@ def register_surface(rest: np.ndarray, triangles: np.ndarray, start: np.ndarray,
                      surface_triangles: np.ndarray, *,
                      scales: tuple = REGISTRATION_SCALES, iterations: int = 4,
                      membrane: float = REGISTRATION_MEMBRANE,
-                     loose: Optional[np.ndarray] = None,
                      factorise: Optional[SPDFactoriser] = None) -> np.ndarray:
     """The vertices of a mesh (``rest`` (n, 3), ``triangles``) moved from ``start`` onto a
     surface, keeping the rows ``fixed`` where ``start`` has them: a non-rigid ICP.
-    Rows of ``fixed`` also in ``loose`` are held loosely instead: pulled towards their
-    ``start`` with the weight every other vertex has towards the surface (its area),
-    so the fit moves them as much as it moves their neighbours off the surface.
     ``factorise``: an :class:`SPDFactoriser` to share with other fits of the same mesh
     (its fill-reducing order is found once).
 
@@ -465,8 +460,7 @@ def register_surface(rest: np.ndarray, triangles: np.ndarray, start: np.ndarray,
     >>> (np.round(out - V, 6) + 0.0).tolist()[0]   # onto the plane z=0, free to slide along it
     [0.2, 0.0, 0.0]
     >>> held = register_surface(V, T, V + [0, 0, 0.5], np.array([0]), V, T)
-    >>> loose = register_surface(V, T, V + [0, 0, 0.5], np.array([0]), V, T, loose=np.array([0]))
-    >>> float(held[0, 2]), 0 < float(loose[0, 2]) < 0.5   # held, or pulled part of the way down
+    >>> float(held[0, 2]), float(held[3, 2]) < 0.5      # held where it was; the rest pulled down
     (0.5, True)
     """
     R = np.asarray(rest, dtype=np.float64)
@@ -477,17 +471,10 @@ def register_surface(rest: np.ndarray, triangles: np.ndarray, start: np.ndarray,
     used[np.unique(T)] = True
     held = np.zeros(n, dtype=bool)
     held[np.asarray(fixed, dtype=np.int64)] = True
-    pulled = np.zeros(n, dtype=bool)
-    if loose is not None:
-        pulled[np.asarray(loose, dtype=np.int64)] = True
-    pulled &= held
-    held &= ~pulled
     free = np.flatnonzero(used & ~held)
     kept = np.flatnonzero(used & held)
     if not len(free) or not len(T):
         return X
-    pull = pulled[free]
-    anchor = X[free[pull]].copy()
     SV = np.asarray(surface_vertices, dtype=np.float64)
     ST = np.asarray(surface_triangles, dtype=np.int64).reshape(-1, 3)
     on = np.unique(ST)
@@ -508,7 +495,6 @@ def register_surface(rest: np.ndarray, triangles: np.ndarray, start: np.ndarray,
             p = SV[on[k]]
             nrm = normals[k]
             near = X[free] - ((X[free] - p) * nrm).sum(axis=1, keepdims=True) * nrm
-            near[pull] = anchor
             rhs = base + m[:, None] * near
             X[free] = solve(np.ascontiguousarray(rhs))
     return X

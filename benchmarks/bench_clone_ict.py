@@ -72,7 +72,7 @@ from benchmarks import ict  # noqa: E402
 from mpeg4fba.cloning import FacialMotionCloner, clone  # noqa: E402
 from mpeg4fba.cloning.correspondence import paper_alignment, surface_alignment  # noqa: E402
 from mpeg4fba.cloning.rigid import fit_rigid  # noqa: E402
-from mpeg4fba.fba.fat import FAT, FaceDefMesh, FaceDefTable  # noqa: E402
+from mpeg4fba.fba.fat import FAT  # noqa: E402
 
 EXPRESSIONS = ("jawOpen", "eyeBlink_L", "mouthSmile_L", "mouthFunnel", "mouthPucker",
                "browInnerUp_L", "cheekPuff_L", "noseSneer_L")
@@ -167,14 +167,8 @@ def print_table(title: str, results: dict) -> dict:
 
 def rigid_jaw(data, source, target, **options) -> tuple:
     """(recovered angle, true angle) of the lower teeth under jawOpen, degrees."""
-    delta = ict.split_deltas(source, data.expressions["jawOpen"])
-    meshes = []
-    for mesh, d in delta.items():
-        moving = np.flatnonzero(np.abs(d).max(axis=1) > 0)
-        if len(moving):
-            meshes.append(FaceDefMesh(mesh, [0, 1024], moving, d[moving][:, None, :] / 1024))
     src = source
-    src.fat = FAT([FaceDefTable(3, meshes)])
+    src.fat = ict.jaw_fat(data, src)
     src.invalidate()
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")

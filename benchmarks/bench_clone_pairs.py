@@ -56,7 +56,6 @@ from benchmarks import ict  # noqa: E402
 from mpeg4fba.cloning import FacialMotionCloner  # noqa: E402
 from mpeg4fba.cloning.rigid import fit_rigid  # noqa: E402
 from mpeg4fba.cloning.surface import point_triangle  # noqa: E402
-from mpeg4fba.fba.fat import FAT, FaceDefMesh, FaceDefTable  # noqa: E402
 from mpeg4fba.fba.featurepoints import FeaturePointSet  # noqa: E402
 from mpeg4fba.fba.face import FaceMesh  # noqa: E402
 
@@ -176,17 +175,6 @@ def regions(face) -> dict:
 
 
 # -- one pair --------------------------------------------------------------------------------
-def _jaw_fat(data, source) -> FAT:
-    """jawOpen as a FAP 3 table on ``source`` (motion at 1024 = the expression)."""
-    delta = ict.split_deltas(source, data.expressions["jawOpen"])
-    meshes = []
-    for mesh, d in delta.items():
-        moving = np.flatnonzero(np.abs(d).max(axis=1) > 0)
-        if len(moving):
-            meshes.append(FaceDefMesh(mesh, [0, 1024], moving, d[moving][:, None, :] / 1024))
-    return FAT([FaceDefTable(3, meshes)])
-
-
 def _source_motion(cloner, source, names, data) -> np.ndarray:
     deltas = ict.split_deltas(source, data.expression_deltas(names))
     out = np.zeros((len(cloner.src.vertices), len(names), 3))
@@ -199,7 +187,7 @@ def measure(data, a: int, b: int, kind: str, fraction: float, options: dict,
             names=EXPRESSIONS) -> PairResult:
     """Clone ICT identity ``a`` onto ``b`` (``kind`` "full" or "decimated") and measure."""
     A = ict.ict_face(data, ict.identity(data, a), name=f"ICT-{a}")
-    A.fat = _jaw_fat(data, A)
+    A.fat = ict.jaw_fat(data, A)
     A.invalidate()
     Vb = ict.identity(data, b)
     if kind == "full":

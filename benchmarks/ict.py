@@ -66,6 +66,7 @@ import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
 
 from mpeg4fba.fba.face import FaceMesh, FaceModel
+from mpeg4fba.fba.fat import FAT, FaceDefMesh, FaceDefTable
 from mpeg4fba.fba.featurepoints import FeaturePointSet
 from mpeg4fba.cloning.surface import vertex_normals  # noqa: F401  (re-exported)
 
@@ -925,3 +926,14 @@ def placed_face(face: FaceModel, placement: Optional[Placement] = None, *, eyes:
         ties = {k: t for k, t in points.vertices.items() if eyes or t[0] not in EYEBALLS}
         pts = FeaturePointSet(pos, ties)
     return FaceModel(meshes, points=pts, name=name or face.name)
+
+
+def jaw_fat(data, source: FaceModel) -> FAT:
+    """jawOpen of ``data`` as a FAP 3 (open_jaw) table on ``source``, its motion at 1024
+    the expression: how the benchmarks see a cloned jaw's rotation."""
+    meshes = []
+    for mesh, d in split_deltas(source, data.expressions["jawOpen"]).items():
+        moving = np.flatnonzero(np.abs(d).max(axis=1) > 0)
+        if len(moving):
+            meshes.append(FaceDefMesh(mesh, [0, 1024], moving, d[moving][:, None, :] / 1024))
+    return FAT([FaceDefTable(3, meshes)])

@@ -64,25 +64,19 @@ def test_random_pairs_hold_todays_figures(results):
         assert r.region_max["brows"] <= 0.5, r
 
 
-@pytest.mark.xfail(strict=True, reason="issue 19's goal (largest error <= 4 % of the eye "
-                   "distance on every pair) is not met: lip corners under jawOpen")
-def test_goal_largest_error(results):
-    assert max(r.max for r in results) <= bp.GOALS["max_worst"]
+def _unmet(reason: str) -> pytest.MarkDecorator:
+    return pytest.mark.xfail(strict=True, reason=f"issue 19's goal is not met: {reason}")
 
 
-@pytest.mark.xfail(strict=True, reason="issue 19's goal (no more than 2 flipped triangles "
-                   "beyond the truth) is not met on full targets")
-def test_goal_flipped_triangles(results):
-    assert max(r.flipped for r in results) <= bp.GOALS["flipped"]
-
-
-@pytest.mark.xfail(strict=True, reason="issue 19's goal (lower teeth within 1 degree) is "
-                   "missed on one of the pairs (1.23 degrees)")
-def test_goal_lower_teeth(results):
-    assert max(r.teeth_deg for r in results) <= bp.GOALS["teeth_deg"]
-
-
-@pytest.mark.xfail(strict=True, reason="issue 19's goal (mean <= 0.06 % of the eye "
-                   "distance on every pair) is missed on one full target (0.070)")
-def test_goal_mean(results):
-    assert max(r.mean for r in results) <= bp.GOALS["mean"]
+@pytest.mark.parametrize("goal, measure", [
+    pytest.param("max_worst", "max", marks=_unmet(
+        "largest error <= 4 % of the eye distance on every pair (lip corners under jawOpen)")),
+    pytest.param("flipped", "flipped", marks=_unmet(
+        "no more than 2 flipped triangles beyond the truth (full targets)")),
+    pytest.param("teeth_deg", "teeth_deg", marks=_unmet(
+        "lower teeth within 1 degree (one of the pairs: 1.23 degrees)")),
+    pytest.param("mean", "mean", marks=_unmet(
+        "mean <= 0.06 % of the eye distance on every pair (one full target: 0.070)")),
+])
+def test_goal(results, goal, measure):
+    assert max(getattr(r, measure) for r in results) <= bp.GOALS[goal]

@@ -348,15 +348,9 @@ class PartMapping:
             pivot = rotation_centre(fit, x.mean(axis=0))
         slide = fit.translation - (np.eye(3) - fit.rotation) @ pivot
         tt = inst.transform(part, self._target_centre(part, pivot) if angle > 1e-9 else None)
-        R_t = linear_part(inst.face, inst.face.transforms[tt].parent)
-        entries = []
-        if angle > 1e-9:
-            entries.append(FaceDefTransform(tt, "rotation",
-                                            rotation=(*(R_t.T @ axis), angle / value)))
-        if np.linalg.norm(slide) > 1e-9 * (np.ptp(x, axis=0).max() or 1.0):
-            t = self._map_translation(part, slide) / value
-            entries.append(FaceDefTransform(tt, "translation", translation=tuple(R_t.T @ t)))
-        return entries
+        moved = np.linalg.norm(slide) > 1e-9 * (np.ptp(x, axis=0).max() or 1.0)
+        return _entries(inst, tt, axis, angle, value,
+                        self._map_translation(part, slide) if moved else None)
 
     def _refitted_entries(self, part: str, nz: np.ndarray, motion: np.ndarray,
                           inst: TransformInstaller) -> list:
@@ -374,15 +368,8 @@ class PartMapping:
         pivot = rotation_centre(fit, xt.mean(axis=0))
         slide = fit.translation - (np.eye(3) - fit.rotation) @ pivot
         tt = inst.transform(part, pivot if angle > 1e-9 else None)
-        R_t = linear_part(inst.face, inst.face.transforms[tt].parent)
-        entries = []
-        if angle > 1e-9:
-            entries.append(FaceDefTransform(tt, "rotation",
-                                            rotation=(*(R_t.T @ axis), angle / value)))
-        if np.linalg.norm(slide) > 1e-9 * (np.ptp(xt, axis=0).max() or 1.0):
-            entries.append(FaceDefTransform(tt, "translation",
-                                            translation=tuple(R_t.T @ slide / value)))
-        return entries
+        moved = np.linalg.norm(slide) > 1e-9 * (np.ptp(xt, axis=0).max() or 1.0)
+        return _entries(inst, tt, axis, angle, value, slide if moved else None)
 
     def _rigid_mapped(self, part: str, motion: np.ndarray) -> np.ndarray:
         """(n_target, 3) a rigid part's source vertex motion (n_source, 3) on the target's
@@ -454,3 +441,18 @@ class PartMapping:
                               shape=(len(pt), len(ps)))
             self._maps[part] = (w, offsets)
         return self._maps[part]
+
+
+def _entries(inst: TransformInstaller, tt: str, axis: np.ndarray, angle: float, value: float,
+             translation: Optional[np.ndarray]) -> list:
+    """The FaceDefTransform entries of Transform ``tt`` for a rotation (``axis``, ``angle``,
+    world frame; none below 1e-9 rad) and a ``translation`` (world; None: none) reached at
+    FAP value ``value``, in the frame of ``tt``'s parent."""
+    R_t = linear_part(inst.face, inst.face.transforms[tt].parent)
+    entries = []
+    if angle > 1e-9:
+        entries.append(FaceDefTransform(tt, "rotation", rotation=(*(R_t.T @ axis), angle / value)))
+    if translation is not None:
+        entries.append(FaceDefTransform(tt, "translation",
+                                        translation=tuple(R_t.T @ (translation / value))))
+    return entries

@@ -128,7 +128,10 @@ def quadric_target(data, vertices: np.ndarray, fraction: float, name: str) -> tu
     V, T = skin.vertices, skin.triangles
     P, F, collapses = fast_simplification.simplify(V, T, target_reduction=1.0 - fraction,
                                                    return_collapses=True)
-    _, F2, into = fast_simplification.replay_simplification(V, T, collapses)
+    # the replay gives which decimated vertex each original one went into; 0.1.7-0.1.8
+    # take only float32 points there (the collapse order is already fixed)
+    _, F2, into = fast_simplification.replay_simplification(
+        np.asarray(V, dtype=np.float32), T, collapses)
     if not np.array_equal(F, F2):
         raise RuntimeError("fast-simplification's replay does not match its decimation")
     P = np.array(P, dtype=np.float64)

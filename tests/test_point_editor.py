@@ -323,7 +323,8 @@ def test_json_numbers_and_strings_match_python(editor):
                123456789012345.6, 1e-300, 5e-324, 1.7976931348623157e308, 0.1, 1 / 3, -1e22,
                0.119, 1e21, 123.0]
     numbers += [rng.uniform(-1, 1) * 10 ** rng.randint(-12, 20) for _ in range(300)]
-    got = editor.js("xs => xs.map(__editor.pyFloat)", numbers)
+    # as JSON text: playwright before 1.6x hands 0.0 to the page as -0
+    got = editor.js("s => JSON.parse(s).map(__editor.pyFloat)", json.dumps(numbers))
     assert got == [json.dumps(x) for x in numbers]
     strings = ["Skin", 'a "q" \\ b', "tab\there\nnl", "Tête", "\x7f\x01", "emoji \U0001F600", "</script>"]
     assert editor.js("xs => xs.map(__editor.pyStr)", strings) == [json.dumps(s) for s in strings]

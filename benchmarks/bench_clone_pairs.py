@@ -311,7 +311,7 @@ def report(results: list, title: str) -> str:
         out.append(f"| {r.source} → {r.target} | {r.kind} | {r.vertices:,} | {r.setup_s:.1f} | "
                    f"{r.mean:.3f} | {r.p95:.3f} | {r.max:.2f} | {w['region']} {w['expression']} "
                    f"(true {w['true_motion']:.1f}, cloned {w['cloned_motion']:.1f}; "
-                   f"{w.get('spread', float('nan')):.1f} within {SPREAD_RADIUS:g}) | "
+                   f"{w['spread']:.1f} within {SPREAD_RADIUS:g}) | "
                    f"{r.flipped} | {r.teeth_deg:.2f} |")
     s = summarise(results)
     out += ["", "Over pairs (median / worst):", "",

@@ -75,8 +75,9 @@ __all__ = ["ALIGNMENTS", "NECK_RATIO", "DERIVE_DISTANCE",
 #:    group), whose 2D position is its aligned position for the lip and eyelid regions;
 #: 5. with ``register=True`` and ``refine=True``, the fit goes on to a sixty-fourth of
 #:    the face (:data:`~mpeg4fba.cloning.surface.REGISTRATION_FINE_SCALES`), feature
-#:    points held, and its result is the surface points the surface weights are taken at; the regions stay with step 4, since a vertex following the
-#:    source's facets can cross the mouth's mid line.
+#:    points held, and its result is the surface points the surface weights are taken
+#:    at; the regions stay with step 4, since a vertex following the source's facets
+#:    can cross the mouth's mid line.
 #:
 #: 2D interpolation between feature points can't see how a surface seen edge-on by the
 #: projection (under the chin, the neck) differs between two faces; the 3D steps can.

@@ -213,6 +213,22 @@ def test_script_interfaces_and_is_inside_protos():
     ("Group {}\n}", 3, ["unexpected '}'"]),
     ("DEF G Group { children USE G }", 2, ["its own ancestor"]),
     ("IMPORT INLINE.foo AS bar", 2, ["IMPORT is X3D"]),
+    # numbers beyond what the types hold are errors, not inf or an OverflowError
+    ("Shape { geometry Sphere { radius 1e309 } }", 2, ["1e309 is too large for a 64-bit float"]),
+    ("Transform { translation 1 -1e400 0 }", 2, ["-1e400 is too large"]),
+    ("Shape { geometry IndexedFaceSet { coord Coordinate { point [ 0 0 0 1 0 0 0 1 0 1 1 0\n"
+     " 2 2 1e999 ] } } }", 3, ["1e999 is too large for a 64-bit float"]),
+    ("Shape { geometry IndexedFaceSet { coordIndex [ 0 1 0x8000000000000000 ] } }", 2,
+     ["0x8000000000000000 is too large for an integer"]),
+    ("Shape { geometry IndexedFaceSet { coordIndex [ 0 1 4294967296 ] } }", 2,
+     ["outside the 32-bit range"]),
+    # an exposedField declares its two events too (VRML97 4.7): their names are taken
+    ("PROTO P [ exposedField SFFloat a 1 eventIn SFFloat set_a ] { Group {} }", 2,
+     ["P declares eventIn set_a", "exposedField a already declares eventIn set_a"]),
+    ("PROTO P [ eventOut SFFloat a_changed exposedField SFFloat a 1 ] { Group {} }", 2,
+     ["P declares exposedField a", "eventOut a_changed, which is already declared"]),
+    ('EXTERNPROTO P [ exposedField SFFloat a eventOut SFFloat a_changed ] "p.wrl"', 2,
+     ["exposedField a already declares eventOut a_changed"]),
 ])
 def test_errors_say_where_and_what(body, line, words):
     e = error_of(H + body, path="x.wrl")
@@ -221,6 +237,12 @@ def test_errors_say_where_and_what(body, line, words):
     assert text.startswith(f"x.wrl:{line}:{e.column}: ")
     for w in words:
         assert w in text, text
+
+
+def test_event_names_that_only_look_implicit_are_fine():
+    s = vrml.loads(H + "PROTO P [ field SFFloat a 1 eventIn SFFloat set_a eventOut SFFloat "
+                   "a_changed exposedField SFFloat set_b 1 ] { Group {} }")
+    assert list(s.protos[0].fields) == ["a", "set_a", "a_changed", "set_b"]
 
 
 def test_error_columns_point_at_the_culprit():

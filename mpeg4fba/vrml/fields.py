@@ -46,6 +46,7 @@ _COMMENT_RE = re.compile(r"#[^\n\r]*")
 _NOT_INTEGER_RE = re.compile(r"[^\s,]*[.eE][^\s,]*")
 _CHUNK = 1 << 22  # characters converted per numpy call; bounds the temporary copies
 _INT32_MIN, _INT32_MAX = -(1 << 31), (1 << 31) - 1
+_INT64_MIN, _INT64_MAX = -(1 << 63), (1 << 63) - 1
 
 
 class NumberError(ValueError):
@@ -88,6 +89,11 @@ def _parse_slow(text: str, start: int, end: int, integer: bool) -> np.ndarray:
             values.append(int(tok))
         else:
             values.append(float(tok))
+        if isinstance(values[-1], int) and not _INT64_MIN <= values[-1] <= _INT64_MAX:
+            raise NumberError(f"{tok} is too large for an integer (VRML97 integers are "
+                              "32-bit)", pos)
+        if not integer and not np.isfinite(float(values[-1])):
+            raise NumberError(f"{tok} is too large for a 64-bit float", pos)
         pos = _SEPARATORS_RE.match(text, m.end(), end).end()
     if integer:
         return np.array(values, dtype=np.int64)
@@ -111,9 +117,12 @@ def _convert_chunk(chunk: str, base: int, text: str, start: int, end: int, integ
     if not chunk.strip():
         return np.empty(0, dtype=np.int64 if integer else np.float64)
     try:
-        return fromstring(chunk, np.int64 if integer else np.float64)
+        values = fromstring(chunk, np.int64 if integer else np.float64)
     except ValueError:
         raise NumberError("not a number", _locate_bad_number(text, start, end)) from None
+    if not integer and not np.isfinite(values).all():
+        _parse_slow(text, start, end, integer)      # raises, with the culprit's offset
+    return values
 
 
 def parse_numbers(text: str, start: int = 0, end: Optional[int] = None,

@@ -232,6 +232,31 @@ _IS_RULES = {  # node side kind -> PROTO interface kinds it may be bound to (VRM
 }
 
 
+_FLOAT_MAX = float(np.finfo(np.float64).max)
+
+
+def _implicit_clash(d, declared: dict) -> Optional[str]:
+    """Why ``d`` may not join the interface ``declared`` (name -> declaration), or None:
+    ``exposedField foo`` declares ``eventIn set_foo`` and ``eventOut foo_changed`` as well
+    (VRML97 4.7), and a node type's interface names are unique.
+
+    >>> from types import SimpleNamespace as D
+    >>> _implicit_clash(D(kind="eventIn", name="set_size"), {"size": D(kind="exposedField")})
+    'its exposedField size already declares eventIn set_size'
+    """
+    if d.kind == "exposedField":
+        for kind, name in (("eventIn", f"set_{d.name}"), ("eventOut", f"{d.name}_changed")):
+            if name in declared:
+                return f"that declares {kind} {name}, which is already declared"
+        return None
+    for base in ((d.name[4:],) if d.name.startswith("set_") else ()) + \
+            ((d.name[:-8],) if d.name.endswith("_changed") else ()):
+        other = declared.get(base)
+        if other is not None and other.kind == "exposedField":
+            return f"its exposedField {base} already declares {d.kind} {d.name}"
+    return None
+
+
 def _kind_text(ftype: FieldType) -> str:
     k = ftype.kind
     if k == "node":
@@ -328,7 +353,9 @@ class _Builder:
                         parts = s.replace(",", " ").split()
                         if len(parts) == ftype.width:
                             vals = [float(p) for p in parts]
-                            return vals[0] if ftype.width == 1 else tuple(vals)
+                            # an overflow (1e309) goes on to be reported with its place
+                            if all(-_FLOAT_MAX <= v <= _FLOAT_MAX for v in vals):
+                                return vals[0] if ftype.width == 1 else tuple(vals)
                 nums = self.numbers(value, kind != "float")
                 if extra_ok and not ftype.mf and kind != "image" and len(nums) > ftype.width:
                     # Seen in the wild: "field SFInt32 x 0 0 0".  The first value is
@@ -559,6 +586,10 @@ class _Builder:
         else:
             if d.name in target.fields:
                 raise self.err(f"{target.name} already declares {d.name!r}", name_tok.start_pos)
+            clash = _implicit_clash(d, target.fields)
+            if clash is not None:
+                raise self.err(f"{target.name} declares {d.kind} {d.name}, but {clash}",
+                               name_tok.start_pos, ["an interface name of its own"])
             target.fields[d.name] = d
         return d, target
 

@@ -213,6 +213,11 @@ def test_script_interfaces_and_is_inside_protos():
     ("Group {}\n}", 3, ["unexpected '}'"]),
     ("DEF G Group { children USE G }", 2, ["its own ancestor"]),
     ("IMPORT INLINE.foo AS bar", 2, ["IMPORT is X3D"]),
+    # each PROTO field's default value is a DEF/USE scope of its own
+    ("PROTO P [ field SFNode a DEF A Group {} field SFNode b USE A ] { Group {} }", 2,
+     ["USE A", "in this field's default value"]),
+    ("DEF A Group {}\nPROTO P [ field SFNode b USE A ] { Group {} }", 3,
+     ["USE A", "DEF/USE scope of its own"]),
     # numbers beyond what the types hold are errors, not inf or an OverflowError
     ("Shape { geometry Sphere { radius 1e309 } }", 2, ["1e309 is too large for a 64-bit float"]),
     ("Transform { translation 1 -1e400 0 }", 2, ["-1e400 is too large"]),
@@ -237,6 +242,40 @@ def test_errors_say_where_and_what(body, line, words):
     assert text.startswith(f"x.wrl:{line}:{e.column}: ")
     for w in words:
         assert w in text, text
+
+
+@pytest.mark.parametrize("body", [
+    "DEF S Script { field SFNode me USE S }",
+    "DEF G Group { children [ DEF S Script { field MFNode all [ USE G USE S ] } ] }",
+    "DEF S Script { field SFNode x Group { children USE S } }",
+    "PROTO P [ ] { DEF G Group { children DEF S Script { field SFNode g USE G } } }\nP {}",
+])
+def test_script_fields_may_name_the_script_or_a_node_holding_it(body):
+    # a Script's node fields are references, not the hierarchy that must have no cycles
+    s = vrml.loads(H + body)
+    out = vrml.dumps(s)
+    again = vrml.loads(out)
+    assert again == s and vrml.dumps(again) == out
+
+
+def test_a_cycle_through_children_inside_a_script_field_is_still_refused():
+    e = error_of(H + "Script { field SFNode x DEF G Group { children USE G } }")
+    assert "USE G inside the node DEF'd as G makes it its own ancestor" in e.message
+
+
+def test_def_and_use_inside_one_proto_default_write_back():
+    text = (H + "DEF A Transform {}\n"
+            "PROTO P [ field MFNode kids [ DEF A Group {} USE A ] field SFNode one DEF A Shape {} ]"
+            " { Group { children IS kids } }\nP {}\nGroup { children USE A }\n")
+    s = vrml.loads(text)
+    kids = s.protos[0].fields["kids"].default
+    assert kids[0] is kids[1] and kids[0].type == "Group"
+    # the defaults' DEFs do not leak: the file's USE A is still its Transform
+    assert s.nodes[-1].fields["children"][0].type == "Transform"
+    out = vrml.dumps(s)
+    assert "DEF A Group" in out and "USE A" in out
+    again = vrml.loads(out)
+    assert again == s and vrml.dumps(again) == out
 
 
 def test_event_names_that_only_look_implicit_are_fine():

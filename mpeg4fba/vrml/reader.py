@@ -206,13 +206,15 @@ class _MF(list):
 class _Scope:
     """File or PROTO-body scope: its PROTO types and DEF names."""
 
-    __slots__ = ("parent", "proto", "protos", "defs")
+    __slots__ = ("parent", "proto", "protos", "defs", "defaults")
 
-    def __init__(self, parent: Optional["_Scope"], proto):
+    def __init__(self, parent: Optional["_Scope"], proto, defaults: bool = False):
         self.parent = parent
         self.proto = proto
         self.protos: dict = {}
         self.defs: dict = {}
+        #: a PROTO interface: each field's default value is a DEF/USE scope of its own
+        self.defaults = defaults
 
     def lookup_type(self, name: str):
         s = self
@@ -602,6 +604,8 @@ class _Builder:
         d, target = self.decl_common(kind_tok, type_tok, name_tok)
         owner = target.type if isinstance(target, self.Node) else target.name
         d.default = self.convert(d, value, f"{owner}.{d.name}", extra_ok=True)
+        if self.scope.defaults:
+            self.scope.defs = {}
         return None
 
     def is_decl(self, items):
@@ -649,14 +653,31 @@ class _Builder:
         if node is None:
             close = difflib.get_close_matches(tok.value, list(self.scope.defs), n=3)
             where = " in this PROTO body" if self.scope.proto is not None else ""
+            if self.scope.defaults:
+                where = (" in this field's default value (each PROTO field's default is a "
+                         "DEF/USE scope of its own)")
             raise self.err(f"USE {tok.value}: no node was DEF'd as {tok.value!r} before{where}",
                            tok.start_pos, [repr(c) for c in close])
-        if id(node) in self.open_defs:
+        if id(node) in self.open_defs and not self.through_script(node):
             message = f"USE {tok.value} inside the node DEF'd as {tok.value} makes it its own ancestor"
             if self.strict:
                 raise self.err(message, tok.start_pos)
             self.warn("cycle:" + tok.value, message + "; kept", tok.start_pos)
         return node
+
+    def through_script(self, node) -> bool:
+        """Whether a USE of the open ``node`` here reaches it through a Script's field: a
+        Script's SFNode and MFNode fields are references, not the transformation
+        hierarchy that may have no cycles (VRML97 4.4.2, 6.40), so the Script itself or
+        a node holding it may be named there."""
+        frames = self.frames
+        for i in range(len(frames) - 1, -1, -1):
+            f = frames[i]
+            if getattr(f, "decl", None) is self.SCRIPT:
+                return any(g is node for g in frames[:i + 1])
+            if f is node:
+                return False
+        return False
 
     def route(self, items):
         fn, ff, _, tn, tf = items
@@ -692,7 +713,9 @@ class _Builder:
         return r
 
     def proto_head(self, items):
-        return self.open_declaration(self.Proto, items[0])
+        proto = self.open_declaration(self.Proto, items[0])
+        self.scope = _Scope(self.scope, None, defaults=True)
+        return proto
 
     def open_declaration(self, cls, tok):
         """A PROTO or EXTERNPROTO whose interface is about to be read."""
@@ -703,7 +726,7 @@ class _Builder:
 
     def proto_body_start(self, items):
         proto = self.frames.pop()
-        self.scope = _Scope(self.scope, proto)
+        self.scope = _Scope(self.scope.parent, proto)       # the interface's scope ends
         return None
 
     def proto(self, items):

@@ -134,25 +134,33 @@ class _Writer:
             raise VRMLError(f"a ROUTE names a {node.type} node that is not in the scene")
         return name
 
+    def scoped(self, statements: list, ops: list) -> list:
+        """``ops`` written in a DEF/USE scope of their own, whose names are planned over
+        ``statements`` (a PROTO body; a PROTO field's default value)."""
+        saved = []
+
+        def enter():
+            saved.append((self.names, self.written, self.bound))
+            self.names, self.written, self.bound = {}, set(), {}
+            self.plan_names(statements)
+
+        def leave():
+            self.names, self.written, self.bound = saved.pop()
+
+        return [("call", enter)] + ops + [("call", leave)]
+
     def proto(self, p: Proto, level: int) -> list:
         ind = _indent(level)
         ops = [ind + f"PROTO {p.name} [\n"]
         for d in p.fields.values():
-            ops.extend(self.declaration(d, None, level + 1))
+            decl = self.declaration(d, None, level + 1)
+            if d.type.kind == "node" and d.has_value:
+                # each field's default value is a DEF/USE scope of its own
+                nodes = d.default if d.type.mf else [d.default]
+                decl = self.scoped([n for n in nodes if n is not None], decl)
+            ops.extend(decl)
         ops.append(ind + "]\n" + ind + "{\n")
-        saved = (self.names, self.written, self.bound)
-
-        def enter():
-            self.names, self.written, self.bound = {}, set(), {}
-            self.plan_names(p.body)
-
-        def leave():
-            self.names, self.written, self.bound = saved
-
-        ops.append(("call", enter))
-        for s in p.body:
-            ops.append(("stmt", s, level + 1))
-        ops.append(("call", leave))
+        ops.extend(self.scoped(p.body, [("stmt", s, level + 1) for s in p.body]))
         ops.append(ind + "}\n")
         return ops
 

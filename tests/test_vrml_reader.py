@@ -263,6 +263,30 @@ def test_a_cycle_through_children_inside_a_script_field_is_still_refused():
     assert "USE G inside the node DEF'd as G makes it its own ancestor" in e.message
 
 
+@pytest.mark.parametrize("body", [
+    "Group { PROTO P [ field SFFloat r 1 ] { Sphere { radius IS r } }\n"
+    " children Shape { geometry P { r 2 } } }",
+    'Transform { EXTERNPROTO E [ field SFFloat r ] "e.wrl" children [ DEF T TouchSensor {}\n'
+    " DEF S Script { eventIn SFBool go } Shape { geometry E {} } ] ROUTE T.isActive TO S.go\n"
+    " translation 1 2 3 }",
+])
+def test_protos_declared_in_a_node_body_are_written_before_their_uses(body):
+    s = vrml.loads(H + body)
+    out = vrml.dumps(s)
+    assert out.index("PROTO") < out.index("geometry")
+    again = vrml.loads(out)
+    assert again == s and vrml.dumps(again) == out
+
+
+def test_a_node_body_built_with_a_route_before_a_proto_writes_and_compares_equal():
+    s = vrml.loads(H + "Group { PROTO P [ ] { Group {} } children [ DEF A TimeSensor {}\n"
+                   " DEF B TimeSensor {} P {} ] ROUTE A.isActive TO B.set_enabled }")
+    group = s.nodes[0]
+    group.statements.reverse()                      # the ROUTE first, as an API user may
+    again = vrml.loads(vrml.dumps(s))
+    assert again == s
+
+
 def test_def_and_use_inside_one_proto_default_write_back():
     text = (H + "DEF A Transform {}\n"
             "PROTO P [ field MFNode kids [ DEF A Group {} USE A ] field SFNode one DEF A Shape {} ]"

@@ -341,6 +341,11 @@ def values_equal(ftype: FieldType, a: Any, b: Any) -> bool:
     return a == b
 
 
+def _declarations_first(statements: list) -> list:
+    """A node body's statements, its PROTO and EXTERNPROTO declarations first."""
+    return sorted(statements, key=lambda s: not isinstance(s, (Proto, ExternProto)))
+
+
 class _Comparer:
     """Structural comparison of graphs: same shape, same values, same sharing."""
 
@@ -435,7 +440,9 @@ class _Comparer:
                 return False
         if len(a.statements) != len(b.statements):
             return False
-        sub = [(x, y) for x, y in zip(a.statements, b.statements)]
+        # a body's PROTOs and its ROUTEs keep their order within each kind; which kind
+        # came first does not matter (the writer puts the PROTOs before the fields)
+        sub = list(zip(_declarations_first(a.statements), _declarations_first(b.statements)))
         for x, y in sub:
             if type(x) is not type(y):
                 return False

@@ -192,6 +192,11 @@ class _Writer:
             return [head + " }"]
         ind = _indent(level + 1)
         ops = [head + "\n"]
+        # PROTOs declared in the body go first, so every use in the fields follows its
+        # declaration; ROUTEs last, after the DEFs they name
+        declared = [s for s in node.statements if isinstance(s, (Proto, ExternProto))]
+        for s in declared:
+            ops.append(("stmt", s, level + 1))
         interface_names = set()
         for d in node.interface:
             interface_names.add(d.name)
@@ -208,7 +213,8 @@ class _Writer:
             if fname not in interface_names:
                 ops.append(ind + f"{fname} IS {pname}\n")
         for s in node.statements:
-            ops.append(("stmt", s, level + 1))
+            if not isinstance(s, (Proto, ExternProto)):
+                ops.append(("stmt", s, level + 1))
         ops.append(_indent(level) + "}")
         return ops
 

@@ -325,6 +325,35 @@ def test_header_rules():
 
 # -- the lenient reader ---------------------------------------------------------------
 
+def test_lenient_reader_reads_a_file_without_or_with_a_late_header():
+    for text, line, words in (("Group {}", 1, "no VRML97 header"),
+                              ("# fragment\n\n#VRML V2.0 utf8\nGroup {}", 3, "not on the first line")):
+        with pytest.warns(VRMLWarning, match=words) as caught:
+            s = vrml.loads(text, strict=False, path="f.wrl")
+        assert len(caught) == 1 and f"f.wrl:{line}:" in str(caught[0].message)
+        assert s.nodes[0].type == "Group"
+        assert error_of(text).line == 1                 # strict: an error
+    with pytest.raises(VRMLError, match="VRML 1.0"):
+        vrml.loads("#VRML V1.0 ascii\nSeparator {}", strict=False)
+
+
+def test_lenient_reader_keeps_an_is_bound_to_an_exposedfield_and_writes_it_back():
+    text = H + ("PROTO R [ exposedField SFVec3f size 1 1 1 ]\n"
+                "{ Shape { geometry Box { size IS size } } }\nR {}\n")
+    e = error_of(text)
+    assert e.line == 3 and "can't be bound with IS to exposedField size" in e.message
+    with pytest.warns(VRMLWarning, match=r"line 3.*Box.size \(field\).*exposedField size") as caught:
+        s = vrml.loads(text, strict=False)
+    assert len(caught) == 1
+    out = vrml.dumps(s)
+    assert "size IS size" in out
+    with pytest.warns(VRMLWarning):
+        assert vrml.loads(out, strict=False) == s
+    # an eventIn bound to an eventOut means nothing: an error in either mode
+    bad = H + "PROTO P [ eventOut SFTime t ] { TimeSensor { set_startTime IS t } }"
+    with pytest.raises(VRMLError, match="can't be bound"):
+        vrml.loads(bad, strict=False)
+
 def test_lenient_reader_keeps_unknown_nodes_and_writes_them_back_unchanged():
     text = H + """DEF M MultiTexture { mode [ "MODULATE" "ADD" ] alpha 0.5 texture [ ImageTexture { url "a.png" } ] }
     Shape { appearance Appearance { material Material { diffuseColor 1 0 0 glow 3 } } }

@@ -43,6 +43,7 @@ class VRMLWarning(UserWarning):
 
 _COMPACT_ABOVE = 8 << 20  # chars: above this a Source keeps line starts, not the text
 _HEADER_RE = re.compile(r"#VRML[ \t]+V2\.0[ \t]+utf8")
+_LATE_HEADER_RE = re.compile(r"^[ \t]*#VRML[ \t]+V2\.0[ \t]+utf8", re.M)
 
 # Where a token may name its kind in an error message.
 _TOKEN_NAMES = {"ID": "a name", "NUMBERS": "a number", "STRING": "a string",
@@ -235,6 +236,14 @@ _IS_RULES = {  # node side kind -> PROTO interface kinds it may be bound to (VRM
 
 
 _FLOAT_MAX = float(np.finfo(np.float64).max)
+
+
+def _lenient_is(node_kind: str, proto_kind: str) -> bool:
+    """Whether the lenient reader keeps an IS that VRML97's table (4.8.3) forbids: a
+    field or an event bound to an exposedField, which X3D allows (its table is VRML97's
+    with these added; an exposedField carries a value and both events); any other
+    mismatch means nothing and stays an error."""
+    return proto_kind == "exposedField" and node_kind != "exposedField"
 
 
 def _implicit_clash(d, declared: dict) -> Optional[str]:
@@ -553,9 +562,13 @@ class _Builder:
             raise self.err(f"{node.type}.{tok.value} is {d.type.name} but PROTO field "
                            f"{pd.name} is {pd.type.name}", ptok.start_pos, [d.type.name])
         if pd.kind not in _IS_RULES[direction]:
-            raise self.err(f"{node.type}.{tok.value} ({d.kind}) can't be bound with IS to "
-                           f"{pd.kind} {pd.name}", ptok.start_pos,
-                           [" or ".join(_IS_RULES[direction])])
+            message = (f"{node.type}.{tok.value} ({d.kind}) can't be bound with IS to "
+                       f"{pd.kind} {pd.name}")
+            if self.strict or not _lenient_is(d.kind, pd.kind):
+                raise self.err(message, ptok.start_pos, [" or ".join(_IS_RULES[direction])])
+            # seen in robot worlds: Box { size IS size } with an exposedField size
+            self.warn(f"is:{node.type}.{tok.value}:{pd.name}", message + " in VRML97; kept",
+                      ptok.start_pos)
 
     def decl_common(self, kind_tok, type_tok, name_tok):
         ftype = FIELD_TYPES.get(type_tok.value)
@@ -920,7 +933,15 @@ def loads(text: str, strict: bool = True, path: Optional[str] = None,
                 raise src.error("VRML 1.0 is not supported; this reader reads VRML97 (V2.0)", 0)
             if first.startswith("#X3D"):
                 raise src.error("this is X3D classic encoding, not VRML97", 0)
-            raise src.error(f"missing VRML97 header, found {first!r}", 0, ["'#VRML V2.0 utf8'"])
+            if strict:
+                raise src.error(f"missing VRML97 header, found {first!r}", 0,
+                                ["'#VRML V2.0 utf8'"])
+            # Inline fragments and hand-edited files: read as VRML97 all the same
+            late = _LATE_HEADER_RE.search(text)
+            message = (f"the VRML97 header is not on the first line but here; read as VRML97"
+                       if late else "no VRML97 header ('#VRML V2.0 utf8'); read as VRML97")
+            warnings.warn(str(src.error(message, late.start() if late else 0)), VRMLWarning,
+                          stacklevel=2)
     with _lock:
         parser, builder = _get_parser()
         if not builder.bound:

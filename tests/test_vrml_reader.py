@@ -337,6 +337,44 @@ def test_lenient_reader_reads_a_file_without_or_with_a_late_header():
         vrml.loads("#VRML V1.0 ascii\nSeparator {}", strict=False)
 
 
+@pytest.mark.parametrize("body, line", [
+    ("Transform { translation 1 nan 0 }", 2),
+    ("Shape { geometry Sphere { radius NaN } }", 2),
+    ("Shape { geometry IndexedFaceSet { coord Coordinate { point [ 0 0 0, 1 0 0,\n"
+     " 0 1 0, 1 1 0, nan 0 0 ] } coordIndex [ 0 1 2 ] } }", 3),
+])
+def test_lenient_reader_keeps_nan_and_writes_it_back(body, line):
+    e = error_of(H + body)
+    assert e.line == line and "is not a VRML97 number" in e.message and "lenient" in e.message
+    with pytest.warns(VRMLWarning, match=f"line {line},.*nan is not a VRML97 number") as caught:
+        s = vrml.loads(H + body, strict=False)
+    assert len(caught) == 1
+    with pytest.raises(VRMLError, match="(?i)nan"):
+        vrml.dumps(s)                                   # strict writing refuses it
+    out = vrml.dumps(s, strict=False)
+    assert "nan" in out
+    with pytest.warns(VRMLWarning):
+        again = vrml.loads(out, strict=False)
+    assert vrml.dumps(again, strict=False) == out
+
+
+@pytest.mark.parametrize("body", [
+    "DEF nan Group {}\nGroup { children USE nan }",
+    "PROTO P [ field SFFloat nan 1 ] { Group {} }",
+    "DEF nan TimeSensor {} DEF t TimeSensor {} ROUTE nan.isActive TO t.set_enabled",
+    "PROTO nan [ ] { Group {} } nan {}",
+])
+def test_nan_as_a_name_is_still_a_name_when_lenient(body):
+    assert vrml.loads(H + body, strict=False) == vrml.loads(H + body)
+
+
+def test_lenient_reader_still_refuses_infinity_and_nan_integers():
+    with pytest.raises(VRMLError, match="too large"):
+        vrml.loads(H + "Transform { translation 1 1e999 0 }", strict=False)
+    with pytest.raises(VRMLError, match="not a number"):
+        vrml.loads(H + "Shape { geometry IndexedFaceSet { coordIndex [ 0 nan 2 ] } }", strict=False)
+
+
 def test_lenient_reader_keeps_an_is_bound_to_an_exposedfield_and_writes_it_back():
     text = H + ("PROTO R [ exposedField SFVec3f size 1 1 1 ]\n"
                 "{ Shape { geometry Box { size IS size } } }\nR {}\n")

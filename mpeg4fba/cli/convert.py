@@ -56,7 +56,7 @@ __all__ = ["convert"]
 @click.option("--mapping", metavar="FILE",
               help="With --morph-targets: JSON or TSV file of file (or glTF target) name -> "
                    "target name, for files whose names don't say what they show.")
-@click.option("--lenient", is_flag=True, help="Keep nodes and fields that are not VRML97, IS bound to exposedFields, a missing header (warns).")
+@click.option("--lenient", is_flag=True, help="Keep nodes and fields that are not VRML97, IS bound to exposedFields, a missing header, nan values (warns).")
 def convert(files: tuple, output: Optional[str], morph_targets: bool, mapping: Optional[str],
             lenient: bool) -> None:
     """Rewrite IN.wrl as canonical VRML97 in OUT.wrl (gzipped if OUT ends in .gz or .wrz);
@@ -83,7 +83,7 @@ def convert(files: tuple, output: Optional[str], morph_targets: bool, mapping: O
     # rewriting IN in place would lose its comments and layout for good: refused
     check_output(target, [(source, "IN")], suffixes=VRML_OUT, what="VRML97", hint=hint)
     scene = read_scene(source, lenient)
-    dump(scene, target)
+    dump(scene, target, strict=not lenient)
     n_nodes = sum(1 for _ in scene)
     size = os.path.getsize(target)
     packed = ", gzip" if target.endswith((".gz", ".wrz")) else ""

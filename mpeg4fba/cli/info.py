@@ -208,7 +208,7 @@ def _face_text(facts: dict) -> str:
                      "\n  mpeg4fba info joy.fap\n  mpeg4fba info talk.glb\n  mpeg4fba info --example")
 @click.argument("file", required=False, metavar="[FILE.wrl|FILE.fap|FILE.glb]")
 @click.option("--json", "as_json", is_flag=True, help="Print the facts as JSON.")
-@click.option("--lenient", is_flag=True, help="Keep nodes and fields that are not VRML97, IS bound to exposedFields, a missing header (warns).")
+@click.option("--lenient", is_flag=True, help="Keep nodes and fields that are not VRML97, IS bound to exposedFields, a missing header, nan values (warns).")
 @click.option("--example", is_flag=True, help="Describe the built-in example scene instead of FILE.")
 def info(file: Optional[str], as_json: bool, lenient: bool, example: bool) -> None:
     """Node counts, PROTOs, ROUTEs, DEFs, meshes and bounding box of a VRML97 file;

@@ -28,6 +28,7 @@ Example
 """
 from __future__ import annotations
 
+import contextvars
 import re
 from dataclasses import dataclass
 from typing import Any, Optional
@@ -41,9 +42,13 @@ __all__ = ["FieldType", "FIELD_TYPES", "Image", "NumberError", "parse_numbers",
 
 _NUM = r"[+-]?(?:0[xX][0-9a-fA-F]+|(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?)"
 _NUMBER_RE = re.compile(_NUM)
+_NAN_RE = re.compile(r"[+-]?[nN][aA][nN]")
 _SEPARATORS_RE = re.compile(r"(?:[\s,]+|#[^\n\r]*)*")
 _COMMENT_RE = re.compile(r"#[^\n\r]*")
 _NOT_INTEGER_RE = re.compile(r"[^\s,]*[.eE][^\s,]*")
+#: Whether the writer writes NaN (as ``nan``): only for what the lenient reader read
+#: (:func:`~mpeg4fba.vrml.writer.dumps` with ``strict=False``).
+WRITE_NAN: contextvars.ContextVar = contextvars.ContextVar("vrml_write_nan", default=False)
 _CHUNK = 1 << 22  # characters converted per numpy call; bounds the temporary copies
 _INT32_MIN, _INT32_MAX = -(1 << 31), (1 << 31) - 1
 _INT64_MIN, _INT64_MAX = -(1 << 63), (1 << 63) - 1
@@ -72,12 +77,15 @@ def _locate_bad_number(text: str, start: int, end: int) -> int:
     return end
 
 
-def _parse_slow(text: str, start: int, end: int, integer: bool) -> np.ndarray:
+def _parse_slow(text: str, start: int, end: int, integer: bool,
+                allow_nan: bool = False) -> np.ndarray:
     """Number by number: for hexadecimal values and for locating errors."""
     values = []
     pos = _SEPARATORS_RE.match(text, start, end).end()
     while pos < end:
         m = _NUMBER_RE.match(text, pos, end)
+        if m is None and allow_nan and not integer:
+            m = _NAN_RE.match(text, pos, end)
         if m is None:
             raise NumberError("not a number", pos)
         tok = m.group()
@@ -92,7 +100,7 @@ def _parse_slow(text: str, start: int, end: int, integer: bool) -> np.ndarray:
         if isinstance(values[-1], int) and not _INT64_MIN <= values[-1] <= _INT64_MAX:
             raise NumberError(f"{tok} is too large for an integer (VRML97 integers are "
                               "32-bit)", pos)
-        if not integer and not np.isfinite(float(values[-1])):
+        if not integer and np.isinf(float(values[-1])):
             raise NumberError(f"{tok} is too large for a 64-bit float", pos)
         pos = _SEPARATORS_RE.match(text, m.end(), end).end()
     if integer:
@@ -100,11 +108,12 @@ def _parse_slow(text: str, start: int, end: int, integer: bool) -> np.ndarray:
     return np.array(values, dtype=np.float64)
 
 
-def _convert_chunk(chunk: str, base: int, text: str, start: int, end: int, integer: bool) -> np.ndarray:
+def _convert_chunk(chunk: str, base: int, text: str, start: int, end: int, integer: bool,
+                   allow_nan: bool = False) -> np.ndarray:
     if "#" in chunk:
         chunk = _COMMENT_RE.sub(" ", chunk)
     if "x" in chunk or "X" in chunk:
-        return _parse_slow(text, start, end, integer)
+        return _parse_slow(text, start, end, integer, allow_nan)
     if integer and ("." in chunk or "e" in chunk or "E" in chunk):
         bad = _NOT_INTEGER_RE.search(chunk)
         off = _locate_bad_number(text, start, end)
@@ -121,20 +130,22 @@ def _convert_chunk(chunk: str, base: int, text: str, start: int, end: int, integ
     except ValueError:
         raise NumberError("not a number", _locate_bad_number(text, start, end)) from None
     if not integer and not np.isfinite(values).all():
-        _parse_slow(text, start, end, integer)      # raises, with the culprit's offset
+        if not allow_nan or np.isinf(values).any():
+            _parse_slow(text, start, end, integer, allow_nan)   # raises, at the culprit
     return values
 
 
 def parse_numbers(text: str, start: int = 0, end: Optional[int] = None,
-                  integer: bool = False) -> np.ndarray:
+                  integer: bool = False, allow_nan: bool = False) -> np.ndarray:
     """All numbers in ``text[start:end]`` (separated by white space, commas, comments).
 
     Converted by numpy in chunks of a few MB straight into one growing array, so a
     50 MB run costs about one copy of its values and no per-number Python work.
     Hexadecimal integers (``0xFF``) are accepted.  With ``integer=True`` the numbers
     must be written as integers and the result is int32 when every value fits (else
-    int64); otherwise it is float64.  Raises :class:`NumberError` with the offset of
-    the culprit.
+    int64); otherwise it is float64.  ``allow_nan``: a ``nan`` word (any case) reads as
+    NaN (the lenient reader's).  Raises :class:`NumberError` with the offset of the
+    culprit.
 
     >>> parse_numbers("1, 2.5 # comment\\n -3e2").tolist()
     [1.0, 2.5, -300.0]
@@ -144,7 +155,7 @@ def parse_numbers(text: str, start: int = 0, end: Optional[int] = None,
     if end is None:
         end = len(text)
     if end - start <= _CHUNK:
-        return _narrow(_convert_chunk(text[start:end], start, text, start, end, integer))
+        return _narrow(_convert_chunk(text[start:end], start, text, start, end, integer, allow_nan))
     out = None
     n = 0
     pos = start
@@ -153,7 +164,7 @@ def parse_numbers(text: str, start: int = 0, end: Optional[int] = None,
         if cut < end:  # split at line ends only, so a chunk never cuts a comment in two
             nl = text.find("\n", cut, end)
             cut = end if nl < 0 else nl + 1
-        part = _narrow(_convert_chunk(text[pos:cut], pos, text, pos, cut, integer))
+        part = _narrow(_convert_chunk(text[pos:cut], pos, text, pos, cut, integer, allow_nan))
         if out is None:
             # Size the array from the first chunk's density, with a little to spare.
             guess = int(len(part) * (end - start) / max(cut - pos, 1) * 1.02) + 16
@@ -220,6 +231,8 @@ _TRAILING_ZERO_RE = re.compile(r"\.0(?=[ ,\n]|$)")
 def format_float(x: float) -> str:
     """Shortest text that reads back to the same float (``1.0`` -> ``1``)."""
     x = float(x)
+    if x != x and WRITE_NAN.get():
+        return "nan"
     if x != x or x in (float("inf"), float("-inf")):
         raise ValueError(f"{x} can't be written in VRML97")
     r = repr(x)
@@ -229,7 +242,7 @@ def format_float(x: float) -> str:
 def format_floats(values: np.ndarray, per_line: int = 0, indent: str = "") -> str:
     """Numbers of a float array, shortest round-trip form, ``per_line`` to a line."""
     flat = np.asarray(values, dtype=np.float64).reshape(-1)
-    if not np.isfinite(flat).all():
+    if not np.isfinite(flat).all() and (np.isinf(flat).any() or not WRITE_NAN.get()):
         raise ValueError("NaN or infinity can't be written in VRML97")
     items = list(map(repr, flat.tolist()))
     return _join(items, per_line, indent, _TRAILING_ZERO_RE)

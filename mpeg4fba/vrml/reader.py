@@ -43,6 +43,9 @@ class VRMLWarning(UserWarning):
 
 _COMPACT_ABOVE = 8 << 20  # chars: above this a Source keeps line starts, not the text
 _HEADER_RE = re.compile(r"#VRML[ \t]+V2\.0[ \t]+utf8")
+_NAN_WORD_RE = re.compile(r"[nN][aA][nN]")
+_NEXT_WORD_RE = re.compile(r"[\s,]*([^\s,\[\]{}#]+)")
+_NAME_BEFORE = frozenset({"DEF", "USE", "ROUTE", "TO", "IS", "PROTO", "EXTERNPROTO"})
 _LATE_HEADER_RE = re.compile(r"^[ \t]*#VRML[ \t]+V2\.0[ \t]+utf8", re.M)
 
 # Where a token may name its kind in an error message.
@@ -92,6 +95,7 @@ class _FastLexer(Lexer):
 
     __future_interface__ = 0
     current_source: Optional[Source] = None
+    current_source_strict = True
 
     def __init__(self, lexer_conf):
         terms = {t.name: t for t in lexer_conf.terminals}
@@ -123,6 +127,18 @@ class _FastLexer(Lexer):
             f"|(?P<P>{punct}))", re.S)
         gi = self.master.groupindex
         self.groups = (gi["ID"], gi["NUMBERS"], gi["STRING"], gi["P"])
+        # The lenient reader's numbers also take a "nan" word (any case, not followed by
+        # more of a name), tried before names: only a run starting with nan can be both.
+        core = r"(0[xX][0-9a-fA-F]+|(\d+\.?\d*|\.\d+)([eE][+-]?\d+)?)"
+        if rx["NUMBERS"].count(core) != 2:
+            raise AssertionError("the grammar's NUMBERS changed: update the lenient nan")
+        word_end = r"(?![^\x00-\x20\x22\x23\x27\x2c\x2e\x5b\x5c\x5d\x7b\x7d\x7f])"
+        loose = rx["NUMBERS"].replace(core, core[:-1] + f"|[nN][aA][nN]{word_end})")
+        self.master_lenient = re.compile(
+            f"{skip}(?:(?P<NUMBERS>{loose})|(?P<ID>{rx['ID']})|(?P<STRING>{rx['STRING']})"
+            f"|(?P<P>{punct}))", re.S)
+        gl = self.master_lenient.groupindex
+        self.groups_lenient = (gl["ID"], gl["NUMBERS"], gl["STRING"], gl["P"])
         # A bracketed run of plain numbers: checked with one character class, the
         # cheapest scan there is, then given to numpy whole.
         self.run_re = re.compile(r"[0-9eE+\-.,\s]*")
@@ -140,23 +156,46 @@ class _FastLexer(Lexer):
             self.words[word] = name
         return name
 
+    @staticmethod
+    def named_nan(text: str, m, prev: str) -> bool:
+        """Whether a "nan" the lenient lexer took for a number is a name: after DEF, USE,
+        ROUTE, TO, IS, (EXTERN)PROTO or a field type, or before "{" or "."."""
+        if prev in _NAME_BEFORE or prev[:2] in ("SF", "MF"):
+            return True
+        after = m.start(m.lastindex) + 3
+        while after < len(text) and text[after] in " \t\r\n,":
+            after += 1
+        return text[after:after + 1] in ("{", ".")
+
     def lex(self, text: str):
-        match = self.master.match
+        lenient = not self.current_source_strict
+        match = (self.master_lenient if lenient else self.master).match
         run_match = self.run_re.match
         words = self.words
         punct = self.punct
         tok = _Tok
-        g_id, g_num, g_str, g_p = self.groups
+        g_id, g_num, g_str, g_p = self.groups_lenient if lenient else self.groups
         pos = 0
+        prev = ""
         while True:
             m = match(text, pos)
             if m is None:
                 break
             i = m.lastindex
-            start = m.start(i)
-            pos = m.end()
+            if lenient:
+                if i == g_num and text[m.start(i)] in "nN" and self.named_nan(text, m, prev):
+                    m = self.master.match(text, pos)   # a name after all: DEF nan, USE nan
+                    i = g_id
+                    start, pos = m.start(self.groups[0]), m.end()
+                    v = m.group(self.groups[0])
+                    m = None
+                prev = v if m is None else (m.group(i) if i == g_id else "")
+            if m is not None:
+                start = m.start(i)
+                pos = m.end()
             if i == g_id:
-                v = m.group(i)
+                if m is not None:
+                    v = m.group(i)
                 kind = words.get(v)
                 if kind is None:
                     kind = self.word_type(v)
@@ -333,9 +372,15 @@ class _Builder:
 
     def numbers(self, tok: _Tok, integer: bool) -> np.ndarray:
         try:
-            return parse_numbers(self.text, tok.start_pos, tok.end_pos, integer)
+            out = parse_numbers(self.text, tok.start_pos, tok.end_pos, integer,
+                                allow_nan=not self.strict)
         except NumberError as e:
             raise self.err(e.message, e.offset) from None
+        if not integer and not self.strict and np.isnan(out).any():
+            at = _NAN_WORD_RE.search(self.text, tok.start_pos, tok.end_pos)
+            self.warn("nan", "nan is not a VRML97 number; kept (written back as nan)",
+                      at.start() if at else tok.start_pos)
+        return out
 
     def check_class(self, node, d, where: str, pos: int) -> None:
         accepts = d.accepts
@@ -377,6 +422,11 @@ class _Builder:
                 try:
                     return ftype.from_numbers(nums, False)
                 except ValueError as e:
+                    after = _NEXT_WORD_RE.match(text, end)
+                    if after and _NAN_WORD_RE.fullmatch(after.group(1)):
+                        raise self.err(f"{where}: {after.group(1)} is not a VRML97 number (the "
+                                       "lenient reader, strict=False or --lenient, keeps it "
+                                       "with a warning)", after.start(1)) from None
                     raise self.err(f"{where}: {e}", start) from None
             if t == "STRING" and kind == "string":
                 s = unquote_string(value.value)
@@ -901,6 +951,10 @@ def _syntax_error(src: Source, e: UnexpectedInput) -> VRMLError:
     prev = re.findall(r"[^\s\[\]{}.,#\"']+", src.text[max(0, pos - 64):pos])
     if prev and prev[-1] in _X3D_WORDS:
         return src.error(f"{prev[-1]} is X3D, not VRML97", pos - len(prev[-1]) - 1)
+    if prev and _NAN_WORD_RE.fullmatch(prev[-1].lstrip("+-")):
+        at = src.text.rfind(prev[-1], 0, pos)
+        return src.error(f"{prev[-1]} is not a VRML97 number (the lenient reader, "
+                         "strict=False or --lenient, keeps it with a warning)", at)
     return src.error(f"unexpected {what}", pos, names)
 
 
@@ -948,6 +1002,7 @@ def loads(text: str, strict: bool = True, path: Optional[str] = None,
             builder.bind()
         builder.reset(src, strict)
         _FastLexer.current_source = src
+        _FastLexer.current_source_strict = bool(strict)
         try:
             scene = parser.parse(text)
         except VRMLError:
@@ -961,6 +1016,7 @@ def loads(text: str, strict: bool = True, path: Optional[str] = None,
         finally:
             builder.reset(Source(""), True)
             _FastLexer.current_source = None
+            _FastLexer.current_source_strict = True
     scene.path = src.path
     if len(text) > _COMPACT_ABOVE:
         src.compact()

@@ -25,7 +25,7 @@ import os
 from typing import Union
 
 from .errors import VRMLError
-from .fields import FieldType, quote_string
+from .fields import WRITE_NAN, FieldType, quote_string
 from .scene import ExternProto, Node, Proto, RawValue, Route, Scene
 
 __all__ = ["dump", "dumps"]
@@ -248,28 +248,34 @@ class _Writer:
         return ops
 
 
-def dumps(scene: Scene) -> str:
+def dumps(scene: Scene, strict: bool = True) -> str:
     """The VRML97 text of ``scene``.  Raises VRMLError for values VRML97 can't hold.
 
     A node used in several places (or named by a ROUTE) without a DEF name is given one,
     ``_1``, ``_2``..., stored on the node: VRML97 can share a node only through a name.
+    ``strict=False`` writes NaN as ``nan``, as the lenient reader reads it (infinity is
+    refused either way).
     """
     w = _Writer()
     w.plan_names(scene.statements)
     ops: list = []
     for s in scene.statements:
         ops.append(("stmt", s, 0))
-    w.run(ops)
+    token = WRITE_NAN.set(not strict)
+    try:
+        w.run(ops)
+    finally:
+        WRITE_NAN.reset(token)
     return HEADER + "\n" + "".join(w.out)
 
 
-def dump(scene: Scene, path: Union[str, os.PathLike]) -> None:
+def dump(scene: Scene, path: Union[str, os.PathLike], strict: bool = True) -> None:
     """Write ``scene`` to ``path``, gzip-compressed when it ends in ``.gz`` or ``.wrz`` (any case).
 
     The file is written to a temporary name beside it and renamed, so a failure never
     leaves a half-written file.
     """
-    text = dumps(scene)
+    text = dumps(scene, strict)
     path = os.fspath(path)
     data = text.encode("utf-8", "surrogateescape")  # invalid bytes read in go back as they were
     if path.lower().endswith((".gz", ".wrz")):  # OUT.WRZ too: never plain text under a gzip name

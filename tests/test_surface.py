@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import numpy as np
+import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -184,3 +185,29 @@ def test_registration_membrane_keeps_the_slide_between_held_points():
     assert over[0][0] > 0.015 and over[0][1] > 0.015                # the thin plate overshoots
     assert over[0][0] > over[1][0] > over[2][0] > 0
     assert over[0][1] > over[1][1] > over[2][1] > 0
+
+
+def _grid(n: int, z: float, up: bool, lo: float = 0.0, hi: float = 1.0):
+    """An n x n grid over [lo, hi]^2 at height ``z``, wound to face +z (``up``) or -z."""
+    x, y = np.meshgrid(np.linspace(lo, hi, n), np.linspace(lo, hi, n))
+    V = np.c_[x.ravel(), y.ravel(), np.full(n * n, z)]
+    i = np.arange(n * n).reshape(n, n)[:-1, :-1].ravel()
+    T = np.r_[np.c_[i, i + 1, i + n + 1], np.c_[i, i + n + 1, i + n]]
+    return V, (T if up else T[:, ::-1])
+
+
+@pytest.mark.parametrize("wound", ["same", "reversed"])
+def test_registration_keeps_to_the_sheet_that_faces_the_same_way(wound):
+    # closed lips: over the middle, a sheet facing down (the upper lip's underside) lies
+    # 0.02 above the one facing up (the lower lip's top); the moving sheet faces up and
+    # starts 0.013 up, nearer the wrong sheet there (the plain nearest vertex took it to
+    # 0.02).  One supple scale, so no stiffer fit settles it first.  A surface wound the
+    # other way round throughout works the same.
+    low, T_low = _grid(101, 0.0, up=wound == "same")
+    high, T_high = _grid(41, 0.02, up=wound != "same", lo=0.3, hi=0.7)
+    SV = np.r_[low, high]
+    ST = np.r_[T_low, T_high + len(low)]
+    rest, T = _grid(41, 0.0, up=True)
+    out = register_surface(rest, T, rest + [0, 0, 0.013], np.array([], dtype=int), SV, ST,
+                           scales=(0.02,))
+    assert np.abs(out[:, 2]).max() < 1e-3

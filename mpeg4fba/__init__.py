@@ -5,18 +5,49 @@
 'Group'
 >>> fba.FAP[3].name
 'open_jaw'
+
+The names below are imported on first use (PEP 562), so ``import mpeg4fba.vrml`` or the
+command line's ``--help`` does not pay for scipy and the cloner.
 """
-from . import fba as standard
-from . import vrml
-from .fba import (EXPRESSIONS, FAP, FAPU, FEATURE_POINTS, VISEMES, FapFrame, FapStream,
-                  FeaturePointSet)
-from .formats.fap import read_fap, write_fap
-from .fba.face import FaceModel
-from .formats.validate import validate
-from .formats.wrl_face import load_face, save_face
-from .cloning import clone
+from __future__ import annotations
+
+import importlib
+from typing import Any
 
 __version__ = "0.1.0"
+
+#: public name -> (module, attribute; None for the module itself)
+_LAZY = {
+    "vrml": ("mpeg4fba.vrml", None),
+    "standard": ("mpeg4fba.fba", None),
+    **{name: ("mpeg4fba.fba", name) for name in (
+        "EXPRESSIONS", "FAP", "FAPU", "FEATURE_POINTS", "VISEMES", "FapFrame", "FapStream",
+        "FeaturePointSet")},
+    "read_fap": ("mpeg4fba.formats.fap", "read_fap"),
+    "write_fap": ("mpeg4fba.formats.fap", "write_fap"),
+    "FaceModel": ("mpeg4fba.fba.face", "FaceModel"),
+    "validate": ("mpeg4fba.formats.validate", "validate"),
+    "load_face": ("mpeg4fba.formats.wrl_face", "load_face"),
+    "save_face": ("mpeg4fba.formats.wrl_face", "save_face"),
+    "clone": ("mpeg4fba.cloning", "clone"),
+}
+
 __all__ = ["vrml", "standard", "FAP", "FAPU", "FEATURE_POINTS", "VISEMES", "EXPRESSIONS",
            "FapFrame", "FapStream", "FeaturePointSet", "read_fap", "write_fap", "load_face",
            "save_face", "FaceModel", "validate", "clone", "__version__"]
+
+
+def __getattr__(name: str) -> Any:
+    try:
+        module, attribute = _LAZY[name]
+    except KeyError:
+        raise AttributeError(f"module 'mpeg4fba' has no attribute {name!r}") from None
+    value = importlib.import_module(module)
+    if attribute is not None:
+        value = getattr(value, attribute)
+    globals()[name] = value         # later lookups skip this function
+    return value
+
+
+def __dir__() -> list:
+    return sorted(set(globals()) | set(__all__))

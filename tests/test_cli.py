@@ -175,3 +175,28 @@ def test_lenient_cycle_warns_in_one_line_each(runner, tmp_path):
     lines = r.stderr.splitlines()
     assert len(lines) == 2 and all(x.startswith("mpeg4fba: warning: ") for x in lines)
     assert "its own ancestor" in lines[1]
+
+
+def test_help_lists_every_subcommand_with_its_own_first_paragraph():
+    # --help lists the subcommands from mpeg4fba.cli.COMMANDS without importing them
+    import click
+
+    from mpeg4fba.cli import COMMANDS
+
+    ctx = click.Context(main)
+    assert main.list_commands(ctx) == sorted(COMMANDS)
+    for name, text in COMMANDS.items():
+        cmd = main.get_command(ctx, name)
+        assert cmd is not None and cmd.name == name
+        assert " ".join(cmd.help.split("\n\n")[0].split()) == text, name
+
+
+def test_help_does_not_import_the_heavy_parts():
+    import subprocess
+    import sys
+
+    code = ("import sys; from mpeg4fba.cli import main\n"
+            "try:\n    main(['--help'])\nexcept SystemExit:\n    pass\n"
+            "print(sorted(m for m in ('numpy', 'scipy', 'lark', 'mpeg4fba.cloning') if m in sys.modules))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip().splitlines()[-1] == "[]"

@@ -502,3 +502,27 @@ def test_mpeg4_face_nodes_read_and_round_trip():
     assert mesh["faceSceneGraphNode"] is s.find("Skin")
     assert mesh["displacements"].shape == (6, 3)
     rt(s)
+
+
+def test_catalogue_defaults_equal_what_the_reader_reads_from_their_text():
+    # the catalogue reads its defaults without the parser (a quick import); each must be
+    # what the reader itself makes of the same text
+    from importlib import resources
+
+    from mpeg4fba.vrml.catalogue import NODE_TYPES
+    from mpeg4fba.vrml.reader import parse_value
+    from mpeg4fba.vrml.scene import values_equal
+
+    text = resources.files("mpeg4fba.vrml").joinpath("data", "nodes.tsv").read_text("utf-8")
+    checked = 0
+    for line in text.splitlines()[1:]:
+        if not line.strip() or line.startswith("#"):
+            continue
+        node, kind, _, name, default, _, _ = line.split("\t")
+        if kind in ("node", "alias") or not default:
+            continue
+        d = NODE_TYPES[node].fields[name]
+        want = parse_value(d.type, default)
+        assert type(d.default) is type(want) and values_equal(d.type, d.default, want), (node, name)
+        checked += 1
+    assert checked > 50

@@ -14,15 +14,17 @@ Example
 from __future__ import annotations
 
 import contextlib
+import importlib
 import sys
 import traceback
 import warnings
 from typing import Any, Iterator, Optional
 
 import click
+from click.utils import make_default_short_help
 
 from .. import __version__
-from ..vrml import Scene, VRMLError, inflate_limits, load
+from ..vrml import VRMLError, inflate_limits
 from ..vrml.inflate import MAX_INFLATED, MAX_RATIO, RATIO_FREE
 
 __all__ = ["main", "read_scene", "warnings_to_stderr"]
@@ -38,8 +40,56 @@ def _one_line(error: BaseException) -> str:
     return " ".join(text.split())
 
 
+#: Each subcommand's module (``mpeg4fba.cli.<name>``) and the first paragraph of its help:
+#: ``--help`` lists them without importing them (scipy, the cloner, the renderer), and a
+#: subcommand is imported when it runs.  ``tests/test_cli.py`` checks these against the
+#: commands' own help.
+COMMANDS = {
+    "clone": "Clone the facial motion of SOURCE (default: the reference head) onto TARGET.",
+    "convert": "Rewrite IN.wrl as canonical VRML97 in OUT.wrl (gzipped if OUT ends in .gz "
+               "or .wrz); with --morph-targets, write the face that a neutral and its morph "
+               "targets make.",
+    "demo": "Clone the reference head's motion onto another head and write what it makes.",
+    "info": "Node counts, PROTOs, ROUTEs, DEFs, meshes and bounding box of a VRML97 file; "
+            "frames, fps, duration and per-FAP min/max of a .fap animation; meshes, FAT and "
+            "bounding box of a face in a .glb, .gltf or .obj file.",
+    "play": "Play STREAM on FACE and write the animation (the output's extension says how).",
+    "points": "Find the MPEG-4 feature points on HEAD (.obj, .glb, .gltf, .wrl) and write "
+              "them.",
+    "render": "Render FACE (neutral or posed) to a PNG or JPEG: one view, a turntable or a "
+              "cloning grid.",
+    "validate": "Check faces and FAP streams against the MPEG-4 FBA rules.",
+}
+
+
 class _Group(click.Group):
-    """A click group that turns the errors users can fix into one line and exit code 1."""
+    """A click group that turns the errors users can fix into one line and exit code 1,
+    and imports a subcommand only when it is used (:data:`COMMANDS`)."""
+
+    def list_commands(self, ctx: click.Context) -> list:
+        return sorted(set(COMMANDS) | set(self.commands))
+
+    def get_command(self, ctx: click.Context, name: str) -> Optional[click.Command]:
+        if name not in self.commands and name in COMMANDS:
+            importlib.import_module(f"{__name__}.{name}")      # registers itself on main
+        return self.commands.get(name)
+
+    def format_commands(self, ctx: click.Context, formatter: click.HelpFormatter) -> None:
+        names = self.list_commands(ctx)
+        if not names:
+            return
+        limit = formatter.width - 6 - max(len(n) for n in names)
+        rows = []
+        for name in names:
+            cmd = self.commands.get(name)
+            if cmd is not None:
+                if cmd.hidden:
+                    continue
+                rows.append((name, cmd.get_short_help_str(limit)))
+            else:
+                rows.append((name, make_default_short_help(COMMANDS[name], limit)))
+        with formatter.section("Commands"):
+            formatter.write_dl(rows)
 
     def invoke(self, ctx: click.Context) -> Any:
         with warnings.catch_warnings():
@@ -116,7 +166,7 @@ def main(ctx: click.Context, verbose: bool, max_inflated: Optional[int] = None,
     ctx.with_resource(inflate_limits(max_inflated, max_ratio))
 
 
-def read_scene(path: str, lenient: bool = False) -> Scene:
+def read_scene(path: str, lenient: bool = False) -> "Scene":
     """Read a VRML file for a subcommand; lenient-reading warnings go to stderr, one line each.
 
     >>> import os, tempfile
@@ -125,6 +175,8 @@ def read_scene(path: str, lenient: bool = False) -> Scene:
     >>> read_scene(p).nodes[0].type
     'Group'
     """
+    from ..vrml import load
+
     with warnings_to_stderr():
         return load(path, strict=not lenient)
 
@@ -168,6 +220,4 @@ def verbose(ctx: Optional[click.Context] = None) -> bool:
     return False
 
 
-from . import clone, convert, demo, info, play, points, render, validate  # noqa: E402  (the subcommands register themselves)
-
-__all__ += ["info", "convert", "validate"]
+__all__ += ["COMMANDS"]

@@ -6,15 +6,40 @@
 'Box'
 >>> vrml.loads(vrml.dumps(scene)) == scene
 True
+
+The names are imported on first use (PEP 562): a program that only needs
+:class:`VRMLError` or :func:`inflate_limits` (the command line's ``--help``) does not
+load numpy, lark and the node catalogue.
 """
-from .catalogue import NODE_TYPES, VRML97_NODES, FieldDecl, NodeType
+from __future__ import annotations
+
+import importlib
+from typing import Any
+
 from .errors import VRMLError
-from .fields import FIELD_TYPES, FieldType, Image
 from .inflate import inflate_limits
-from .reader import VRMLWarning, load, loads
-from .scene import ExternProto, Node, Proto, RawValue, Route, Scene
-from .writer import dump, dumps
+
+_LAZY = {
+    **{name: "catalogue" for name in ("NODE_TYPES", "VRML97_NODES", "FieldDecl", "NodeType")},
+    **{name: "fields" for name in ("FIELD_TYPES", "FieldType", "Image")},
+    **{name: "reader" for name in ("VRMLWarning", "load", "loads")},
+    **{name: "scene" for name in ("ExternProto", "Node", "Proto", "RawValue", "Route", "Scene")},
+    **{name: "writer" for name in ("dump", "dumps")},
+}
 
 __all__ = ["load", "loads", "dump", "dumps", "Scene", "Node", "Proto", "ExternProto", "Route",
            "RawValue", "FieldDecl", "NodeType", "NODE_TYPES", "VRML97_NODES", "FIELD_TYPES",
            "FieldType", "Image", "VRMLError", "VRMLWarning", "inflate_limits"]
+
+
+def __getattr__(name: str) -> Any:
+    module = _LAZY.get(name)
+    if module is None:
+        raise AttributeError(f"module 'mpeg4fba.vrml' has no attribute {name!r}")
+    value = getattr(importlib.import_module(f"{__name__}.{module}"), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list:
+    return sorted(set(globals()) | set(__all__))

@@ -14,11 +14,12 @@ Example
 """
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass, field as _field
 from importlib import resources
 from typing import Any, Optional
 
-from .fields import FIELD_TYPES, FieldType
+from .fields import FIELD_TYPES, FieldType, parse_numbers, unquote_string
 
 __all__ = ["FieldDecl", "Interface", "NodeType", "NODE_TYPES", "EVENT_KINDS", "VRML97_NODES"]
 
@@ -111,9 +112,34 @@ class NodeType(Interface):
         return f"<NodeType {self.name}>"
 
 
-def _load() -> dict:
-    from .reader import parse_value  # defaults are VRML text, read by the reader itself
+_STRING_RE = re.compile(r'"(?:[^"\\]|\\.)*"')
 
+
+def _default(ftype: FieldType, text: str) -> Any:
+    """A catalogue default from its VRML text: NULL, TRUE/FALSE, numbers, strings or
+    ``[]`` are all the table holds, so it is read here without building the parser
+    (``import mpeg4fba.vrml`` stays quick); ``tests/test_vrml_reader.py`` checks every
+    default against the reader's own :func:`~mpeg4fba.vrml.reader.parse_value`."""
+    body = text.strip()
+    bracketed = body.startswith("[")
+    if bracketed:
+        body = body[1:-1].strip()
+    if ftype.kind == "node":
+        if body not in ("", "NULL"):
+            raise ValueError(f"a node default must be NULL or [], not {text!r}")
+        return [] if ftype.mf else None
+    if ftype.kind == "bool":
+        return body == "TRUE"
+    if ftype.kind == "string":
+        values = [unquote_string(m) for m in _STRING_RE.findall(body)]
+        return values if ftype.mf else values[0]
+    if not body:
+        return ftype.empty()
+    return ftype.from_numbers(parse_numbers(body, integer=ftype.kind in ("int", "image")),
+                              bracketed)
+
+
+def _load() -> dict:
     text = resources.files(__package__).joinpath("data", "nodes.tsv").read_text("utf-8")
     types: dict = {}
     lines = text.splitlines()
@@ -129,7 +155,7 @@ def _load() -> dict:
                 types[node].alias_origin[name] = origin
         else:
             t = FIELD_TYPES[ftype]
-            value = parse_value(t, default, f"nodes.tsv:{lineno}") if default else t.empty()
+            value = _default(t, default) if default else t.empty()
             acc = None if not accepts or accepts == "any" else tuple(accepts.split(","))
             types[node].fields[name] = FieldDecl(kind, t, name, value, acc, origin=origin or None)
     return types

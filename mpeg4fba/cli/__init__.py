@@ -18,13 +18,16 @@ import importlib
 import sys
 import traceback
 import warnings
-from typing import Any, Iterator, Optional
+from typing import TYPE_CHECKING, Any, Iterator, Optional
 
 import click
 from click.utils import make_default_short_help
 
 from .. import __version__
 from ..vrml import VRMLError, inflate_limits
+
+if TYPE_CHECKING:
+    from ..vrml import Scene
 from ..vrml.inflate import MAX_INFLATED, MAX_RATIO, RATIO_FREE
 
 __all__ = ["main", "read_scene", "warnings_to_stderr"]
@@ -166,7 +169,7 @@ def main(ctx: click.Context, verbose: bool, max_inflated: Optional[int] = None,
     ctx.with_resource(inflate_limits(max_inflated, max_ratio))
 
 
-def read_scene(path: str, lenient: bool = False) -> "Scene":
+def read_scene(path: str, lenient: bool = False) -> Scene:
     """Read a VRML file for a subcommand; lenient-reading warnings go to stderr, one line each.
 
     >>> import os, tempfile

@@ -87,7 +87,12 @@ _MEM_CHILD = r"""
 import gc, json, resource, sys
 sys.path.insert(0, sys.argv[1])
 from mpeg4fba import vrml
-path, mode = sys.argv[2], sys.argv[3]
+path, mode, action = sys.argv[2], sys.argv[3], sys.argv[4]
+def work():
+    scene = vrml.load(path)
+    if action == "convert":          # what `mpeg4fba convert` does: read, then write
+        vrml.dump(scene, sys.argv[5])
+    return scene
 # Build the (lazily made) parser now, so the baseline holds it and the imports.
 vrml.loads("#VRML V2.0 utf8\nShape { geometry IndexedFaceSet { coord Coordinate "
            "{ point [ 0 0 0, 1 0 0, 0 1 0 ] } coordIndex [ 0, 1, 2, -1 ] } }")
@@ -111,24 +116,26 @@ if mode == "rss":
         out["hwm_reset"] = True
     except OSError:
         out["hwm_reset"] = False
-    scene = vrml.load(path)
+    scene = work()
     out["maxrss_after_kb"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
     out["hwm_after_kb"] = status_kb("VmHWM")
 else:
     import tracemalloc
     tracemalloc.start()
-    scene = vrml.load(path)
+    scene = work()
     out["traced_current"], out["traced_peak"] = tracemalloc.get_traced_memory()
 print(json.dumps(out))
 """
 
 
-def measure_memory(path: Path, payload: int) -> dict:
-    """Peak memory of ``load(path)`` in fresh interpreters, over a post-import baseline."""
+def measure_memory(path: Path, payload: int, action: str = "load") -> dict:
+    """Peak memory of ``load(path)`` (``action="convert"``: and ``dump`` of the scene to
+    a file beside it) in fresh interpreters, over a post-import baseline."""
     res = {}
+    out = path.with_name(path.stem + "-converted.wrl")
     for mode in ("rss", "tracemalloc"):
-        proc = subprocess.run([sys.executable, "-c", _MEM_CHILD, str(REPO), str(path), mode],
-                              capture_output=True, text=True)
+        proc = subprocess.run([sys.executable, "-c", _MEM_CHILD, str(REPO), str(path), mode,
+                               action, str(out)], capture_output=True, text=True)
         if proc.returncode != 0:
             raise RuntimeError(f"memory subprocess ({mode}) failed:\n{proc.stderr[-2000:]}")
         res.update(json.loads(proc.stdout.strip().splitlines()[-1]))
@@ -319,6 +326,13 @@ def main(argv=None) -> int:
                   f"{rss_x:.2f}x payload ({mem['rss_increase'] / MB:.0f} MB)", "< 3x", rss_x < 3)
         res.other("  tracemalloc peak, same load", info["bytes"],
                   f"{tm_x:.2f}x payload ({mem['traced_peak'] / MB:.0f} MB)", "< 3x", tm_x < 3)
+        conv = measure_memory(ifs_path, payload, "convert")
+        c_rss, c_tm = conv["rss_increase"] / payload, conv["traced_peak"] / payload
+        print(f"{'  peak memory of load + dump (convert)':<40} peak RSS +{conv['rss_increase'] / MB:.1f} MB "
+              f"= {c_rss:.2f}x, tracemalloc peak {conv['traced_peak'] / MB:.1f} MB = {c_tm:.2f}x   "
+              f"target < 4x: {'met' if max(c_rss, c_tm) < 4 else 'MISSED'}", flush=True)
+        res.other("  peak RSS increase, load + dump (convert)", info["bytes"],
+                  f"{c_rss:.2f}x payload ({conv['rss_increase'] / MB:.0f} MB)", "< 4x", c_rss < 4)
 
         # 3. 4,096 Transforms
         tr_path = tmp / "transforms.wrl"

@@ -13,11 +13,12 @@ temporary file (which the user never heard of).
 """
 from __future__ import annotations
 
+import contextlib
 import os
 import tempfile
-from typing import Union
+from typing import BinaryIO, Iterator, Union
 
-__all__ = ["atomic_write"]
+__all__ = ["atomic_write", "atomic_open"]
 
 
 def _umask() -> int:
@@ -28,19 +29,35 @@ def _umask() -> int:
 
 def atomic_write(path: Union[str, "os.PathLike[str]"], data: Union[bytes, str]) -> None:
     """Write ``data`` (bytes, or text written as UTF-8) to ``path`` atomically."""
+    if isinstance(data, str):
+        data = data.encode("utf-8")
+    with atomic_open(path) as f:
+        f.write(data)
+
+
+@contextlib.contextmanager
+def atomic_open(path: Union[str, "os.PathLike[str]"]) -> Iterator[BinaryIO]:
+    """A binary file to write ``path`` through, a piece at a time: it becomes ``path``
+    when the block ends, and is removed if the block raises.
+
+    >>> import os, tempfile
+    >>> p = os.path.join(tempfile.mkdtemp(), "b.txt")
+    >>> with atomic_open(p) as f:
+    ...     _ = f.write(b"one "); _ = f.write(b"two")
+    >>> open(p).read()
+    'one two'
+    """
     path = os.fspath(path)
     folder = os.path.dirname(os.path.abspath(path))
     if not os.path.isdir(folder):
         raise FileNotFoundError(2, f"the folder {folder} does not exist", path)
-    if isinstance(data, str):
-        data = data.encode("utf-8")
     try:
         fd, tmp = tempfile.mkstemp(prefix=".tmp-", suffix=os.path.basename(path), dir=folder)
     except OSError as e:
         raise _naming(e, path) from e
     try:
         with os.fdopen(fd, "wb") as f:
-            f.write(data)
+            yield f
         os.chmod(tmp, 0o666 & ~_umask())
         os.replace(tmp, path)
     except BaseException as e:

@@ -526,3 +526,19 @@ def test_catalogue_defaults_equal_what_the_reader_reads_from_their_text():
         assert type(d.default) is type(want) and values_equal(d.type, d.default, want), (node, name)
         checked += 1
     assert checked > 50
+
+
+def test_dump_streams_the_same_text_as_dumps_for_a_big_mesh(tmp_path):
+    # past one formatting block (65,536 numbers) and one flush (1 MiB): the pieces the
+    # writer sends out must add up to exactly the text dumps makes
+    rng = np.random.default_rng(5)
+    points = rng.standard_normal((70_000, 3)).round(4)
+    faces = np.c_[rng.integers(0, 70_000, (50_000, 3)), np.full(50_000, -1)].ravel()
+    scene = vrml.Scene([vrml.Node("Shape", geometry=vrml.Node(
+        "IndexedFaceSet", coord=vrml.Node("Coordinate", point=points), coordIndex=faces))])
+    text = vrml.dumps(scene)
+    vrml.dump(scene, tmp_path / "a.wrl")
+    vrml.dump(scene, tmp_path / "a.wrl.gz")
+    assert (tmp_path / "a.wrl").read_text() == text
+    assert gzip.decompress((tmp_path / "a.wrl.gz").read_bytes()).decode() == text
+    assert vrml.load(tmp_path / "a.wrl.gz") == scene

@@ -49,6 +49,7 @@ _NOT_INTEGER_RE = re.compile(r"[^\s,]*[.eE][^\s,]*")
 #: Whether the writer writes NaN (as ``nan``): only for what the lenient reader read
 #: (:func:`~mpeg4fba.vrml.writer.dumps` with ``strict=False``).
 WRITE_NAN: contextvars.ContextVar = contextvars.ContextVar("vrml_write_nan", default=False)
+_BLOCK = 1 << 16  # numbers formatted per step (a multiple of 16 and of 2, 3 and 4 wide)
 _CHUNK = 1 << 22  # characters converted per numpy call; bounds the temporary copies
 _INT32_MIN, _INT32_MAX = -(1 << 31), (1 << 31) - 1
 _INT64_MIN, _INT64_MAX = -(1 << 63), (1 << 63) - 1
@@ -239,13 +240,26 @@ def format_float(x: float) -> str:
     return r[:-2] if r.endswith(".0") else r
 
 
+def _check_finite(flat: np.ndarray) -> None:
+    if not np.isfinite(flat).all() and (np.isinf(flat).any() or not WRITE_NAN.get()):
+        raise ValueError("NaN or infinity can't be written in VRML97")
+
+
 def format_floats(values: np.ndarray, per_line: int = 0, indent: str = "") -> str:
     """Numbers of a float array, shortest round-trip form, ``per_line`` to a line."""
     flat = np.asarray(values, dtype=np.float64).reshape(-1)
-    if not np.isfinite(flat).all() and (np.isinf(flat).any() or not WRITE_NAN.get()):
-        raise ValueError("NaN or infinity can't be written in VRML97")
-    items = list(map(repr, flat.tolist()))
-    return _join(items, per_line, indent, _TRAILING_ZERO_RE)
+    _check_finite(flat)
+    parts, sep = _float_parts(flat, per_line, indent)
+    return sep.join(parts)
+
+
+def _float_parts(flat: np.ndarray, per_line: int, indent: str) -> tuple:
+    """(texts of blocks of ``flat``, the separator between them): a block at a time, as
+    a list of Python floats and their strings costs ~100 bytes a number."""
+    step = _BLOCK - _BLOCK % per_line if per_line else _BLOCK
+    parts = [_join(list(map(repr, flat[i:i + step].tolist())), per_line, indent,
+                   _TRAILING_ZERO_RE) for i in range(0, len(flat), step)]
+    return parts, ((",\n" + indent) if per_line else " ")
 
 
 def _join(items: list, per_line: int, indent: str, strip=None) -> str:
@@ -432,6 +446,31 @@ class FieldType:
         return numbers
 
     # -- value -> text ----------------------------------------------------------------------
+    def format_parts(self, value: Any, indent: str = "") -> list:
+        """:meth:`format` as a list of pieces: a long MF number list in blocks, so a
+        writer can send a big mesh out without ever holding its whole text."""
+        if not (self.mf and self.kind in ("int", "float")) or len(value) < 2:
+            return [self.format(value, indent)]
+        inner = indent + "  "
+        if self.kind == "int":
+            parts, sep = _int_parts(np.asarray(value).reshape(-1), inner)
+        else:
+            flat = np.asarray(value, dtype=np.float64).reshape(-1)
+            _check_finite(flat)
+            parts, sep = _float_parts(flat, self.width if self.width > 1 else 10, inner)
+        if len(parts) == 1:
+            text = parts[0]
+            if "\n" in text or len(text) > 60:
+                return ["[\n" + inner + text + "\n" + indent + "]"]
+            return ["[ " + text + " ]"]
+        out = ["[\n" + inner]
+        for i, part in enumerate(parts):
+            if i:
+                out.append(sep)
+            out.append(part)
+        out.append("\n" + indent + "]")
+        return out
+
     def format(self, value: Any, indent: str = "") -> str:
         """Text of a non-node value.  ``indent`` is used for multi-line MF values."""
         k = self.kind
@@ -447,8 +486,7 @@ class FieldType:
                 return "[]"
             inner = indent + "  "
             if k == "int":
-                items = list(map(str, np.asarray(value).tolist()))
-                text = _format_index_list(items, inner)
+                text = _format_ints(np.asarray(value).reshape(-1), inner)
             else:
                 text = format_floats(value, self.width if self.width > 1 else 10, inner)
             if n == 1:
@@ -469,6 +507,32 @@ class FieldType:
         if self.width == 1:
             return format_float(value)
         return " ".join(map(format_float, value))
+
+
+def _format_ints(values: np.ndarray, indent: str) -> str:
+    """:func:`_format_index_list` of a whole array, a block at a time (same text)."""
+    parts, sep = _int_parts(values, indent)
+    return sep.join(parts)
+
+
+def _int_parts(values: np.ndarray, indent: str) -> tuple:
+    """(texts of blocks of ``values``, the separator between them)."""
+    n = len(values)
+    if n <= _BLOCK:
+        return [_format_index_list(list(map(str, values.tolist())), indent)], ""
+    faces = bool((values[:64] == -1).any())
+    if faces:
+        # cut just after a -1, so each block's last face ends where the block does
+        ends = np.flatnonzero(values == -1) + 1
+        cuts = np.unique(ends[np.searchsorted(ends, np.arange(_BLOCK, n, _BLOCK))
+                              .clip(0, len(ends) - 1)])
+        cuts = cuts[cuts < n]
+    else:
+        cuts = np.arange(_BLOCK, n, _BLOCK)         # multiples of 16: whole lines
+    bounds = np.concatenate([[0], cuts, [n]])
+    parts = [_format_index_list(list(map(str, values[a:b].tolist())), indent)
+             for a, b in zip(bounds[:-1].tolist(), bounds[1:].tolist())]
+    return parts, ",\n" + indent
 
 
 def _format_index_list(items: list, indent: str) -> str:

@@ -18,11 +18,11 @@ Transform {
 """
 from __future__ import annotations
 
-from .._atomic import atomic_write  # noqa: F401  (re-exported: the writers' one way to write)
+from .._atomic import atomic_open, atomic_write  # noqa: F401  (atomic_write re-exported: the writers' one way to write)
 
 import gzip
 import os
-from typing import Union
+from typing import Optional, Union
 
 from .errors import VRMLError
 from .fields import WRITE_NAN, FieldType, quote_string
@@ -44,9 +44,34 @@ def _indent(level: int) -> str:
     return "  " * min(level, _MAX_INDENT)
 
 
+class _Sink(list):
+    """The writer's output for :func:`dump`: pieces of text gathered and written to a
+    binary file about a MiB at a time, so a big scene is never one string and its bytes
+    at once."""
+
+    FLUSH = 1 << 20
+
+    def __init__(self, file) -> None:
+        super().__init__()
+        self.file = file
+        self.size = 0
+
+    def append(self, piece: str) -> None:
+        super().append(piece)
+        self.size += len(piece)
+        if self.size >= self.FLUSH:
+            self.flush()
+
+    def flush(self) -> None:
+        # invalid bytes read in go back as they were
+        self.file.write("".join(self).encode("utf-8", "surrogateescape"))
+        self.clear()
+        self.size = 0
+
+
 class _Writer:
-    def __init__(self):
-        self.out: list = []
+    def __init__(self, out: Optional[list] = None):
+        self.out: list = [] if out is None else out
         self.names: dict = {}     # id(node) -> name used for DEF/USE
         self.written: set = set()  # ids of nodes already written (in this scope)
         self.bound: dict = {}      # DEF name -> id(node) it refers to now
@@ -221,7 +246,7 @@ class _Writer:
     def value(self, ftype: FieldType, value, level: int) -> list:
         if ftype.kind != "node":
             try:
-                return [ftype.format(value, _indent(level))]
+                return ftype.format_parts(value, _indent(level))
             except ValueError as e:
                 raise VRMLError(f"can't write a {ftype.name} value: {e}") from None
         if not ftype.mf:
@@ -257,6 +282,11 @@ def dumps(scene: Scene, strict: bool = True) -> str:
     refused either way).
     """
     w = _Writer()
+    _write(w, scene, strict)
+    return HEADER + "\n" + "".join(w.out)
+
+
+def _write(w: _Writer, scene: Scene, strict: bool) -> None:
     w.plan_names(scene.statements)
     ops: list = []
     for s in scene.statements:
@@ -266,20 +296,26 @@ def dumps(scene: Scene, strict: bool = True) -> str:
         w.run(ops)
     finally:
         WRITE_NAN.reset(token)
-    return HEADER + "\n" + "".join(w.out)
 
 
 def dump(scene: Scene, path: Union[str, os.PathLike], strict: bool = True) -> None:
     """Write ``scene`` to ``path``, gzip-compressed when it ends in ``.gz`` or ``.wrz`` (any case).
 
     The file is written to a temporary name beside it and renamed, so a failure never
-    leaves a half-written file.
+    leaves a half-written file; the text goes out a MiB at a time, never whole in memory.
     """
-    text = dumps(scene, strict)
     path = os.fspath(path)
-    data = text.encode("utf-8", "surrogateescape")  # invalid bytes read in go back as they were
-    if path.lower().endswith((".gz", ".wrz")):  # OUT.WRZ too: never plain text under a gzip name
-        data = gzip.compress(data, compresslevel=6, mtime=0)
-    atomic_write(path, data)
+    with atomic_open(path) as raw:
+        # OUT.WRZ too: never plain text under a gzip name
+        packed = path.lower().endswith((".gz", ".wrz"))
+        f = gzip.GzipFile(fileobj=raw, mode="wb", compresslevel=6, mtime=0) if packed else raw
+        try:
+            sink = _Sink(f)
+            sink.append(HEADER + "\n")
+            _write(_Writer(sink), scene, strict)
+            sink.flush()
+        finally:
+            if packed:
+                f.close()
 
 

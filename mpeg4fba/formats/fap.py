@@ -51,7 +51,7 @@ import numpy as np
 from .._numbers import fromstring
 from ..fba.stream import FapStream
 from ..fba.tables import N_FAPS
-from ..vrml.writer import atomic_write
+from .._atomic import atomic_write
 from .errors import FormatError
 
 __all__ = ["read_fap", "loads_fap", "write_fap", "dumps_fap", "FapError", "FapWarning",

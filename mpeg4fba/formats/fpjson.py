@@ -66,7 +66,7 @@ from typing import Mapping, Optional, Union
 
 from ..fba.fapu import FAPU
 from ..fba.featurepoints import FeaturePointError, FeaturePointSet, normalise_id, point_order
-from ..vrml.writer import atomic_write
+from .._atomic import atomic_write
 from .errors import FormatError
 
 __all__ = ["FORMAT_NAME", "FORMAT_VERSION", "read_feature_points_json",

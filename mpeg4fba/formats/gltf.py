@@ -73,7 +73,7 @@ from ..fba.face import FaceModel, FaceTransform, table_values
 from ..fba.fat import FaceDefTable, interval_weights, rotation_matrices
 from ..fba.morph import TargetKey
 from ..fba.stream import FapStream
-from ..vrml.writer import atomic_write
+from .._atomic import atomic_write
 
 if TYPE_CHECKING:        # pygltflib is imported when a document is made
     import pygltflib

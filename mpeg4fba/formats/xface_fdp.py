@@ -42,7 +42,7 @@ import numpy as np
 from ..fba.fapu import FAPU
 from ..fba.featurepoints import FeaturePointError, FeaturePointSet, normalise_id
 from ..fba.tables import FAP, N_FAPS
-from ..vrml.writer import atomic_write
+from .._atomic import atomic_write
 from .errors import FormatError
 
 __all__ = ["XfaceFdp", "XfaceFdpItem", "XfaceEntity", "XfaceMesh", "XfaceBind", "Influence",

@@ -18,7 +18,7 @@ Transform {
 """
 from __future__ import annotations
 
-from .._atomic import atomic_open, atomic_write  # noqa: F401  (atomic_write re-exported: the writers' one way to write)
+from .._atomic import atomic_open
 
 import gzip
 import os

@@ -542,3 +542,30 @@ def test_dump_streams_the_same_text_as_dumps_for_a_big_mesh(tmp_path):
     assert (tmp_path / "a.wrl").read_text() == text
     assert gzip.decompress((tmp_path / "a.wrl.gz").read_bytes()).decode() == text
     assert vrml.load(tmp_path / "a.wrl.gz") == scene
+
+
+@pytest.mark.parametrize("body", [
+    None,                                              # the built-in example scene
+    "PROTO P [ field SFFloat r 1 field MFNode k [ DEF A Group {} USE A ] ] { Sphere { radius IS r } }\n"
+    "DEF T Transform { children [ Shape { geometry P { r 2 } } DEF S Script { eventIn SFBool go\n"
+    " field SFNode me USE S } DEF Q TouchSensor {} ] ROUTE Q.isActive TO S.go }",
+    "Transform { translation 1 2 }",                   # errors must be the same too
+    "Group { children [ Group { } ",
+    "Group { children [ } ]",
+    "DEF G Group { children USE G }",
+])
+def test_our_lalr_loop_and_larks_give_the_same_scenes_and_errors(body, monkeypatch):
+    from mpeg4fba.vrml import reader
+    from mpeg4fba.vrml.examples import example_scene
+
+    text = vrml.dumps(example_scene()) if body is None else H + body
+
+    def outcome():
+        try:
+            return vrml.loads(text)
+        except VRMLError as e:
+            return str(e)
+
+    ours = outcome()
+    monkeypatch.setattr(reader, "_parse", lambda parser, text: parser.parse(text))
+    assert outcome() == ours

@@ -21,7 +21,6 @@ import warnings
 from typing import TYPE_CHECKING, Any, Iterator, Optional
 
 import click
-from click.utils import make_default_short_help
 
 from .. import __version__
 from ..vrml import VRMLError, inflate_limits
@@ -65,6 +64,30 @@ COMMANDS = {
 }
 
 
+def _short_help(text: str, limit: int) -> str:
+    """The first sentence of ``text``, cut at a word to fit ``limit`` characters.
+
+    >>> _short_help("Check faces against the rules. Then more.", 40)
+    'Check faces against the rules.'
+    >>> _short_help("Node counts, PROTOs, ROUTEs, DEFs, meshes and bounding box", 30)
+    'Node counts, PROTOs...'
+    """
+    words = text.split()
+    for i, word in enumerate(words):
+        if word.endswith("."):
+            words = words[:i + 1]
+            break
+    line = " ".join(words)
+    if len(line) <= limit:
+        return line
+    out = ""
+    for word in words:
+        if len(out) + len(word) + 1 + 3 > limit:
+            break
+        out = f"{out} {word}" if out else word
+    return out.rstrip(",;:") + "..."
+
+
 class _Group(click.Group):
     """A click group that turns the errors users can fix into one line and exit code 1,
     and imports a subcommand only when it is used (:data:`COMMANDS`)."""
@@ -85,12 +108,10 @@ class _Group(click.Group):
         rows = []
         for name in names:
             cmd = self.commands.get(name)
-            if cmd is not None:
-                if cmd.hidden:
-                    continue
-                rows.append((name, cmd.get_short_help_str(limit)))
-            else:
-                rows.append((name, make_default_short_help(COMMANDS[name], limit)))
+            if cmd is not None and cmd.hidden:
+                continue
+            text = COMMANDS.get(name) or (cmd.help or "" if cmd is not None else "")
+            rows.append((name, _short_help(text, limit)))
         with formatter.section("Commands"):
             formatter.write_dl(rows)
 

@@ -28,7 +28,7 @@ from typing import Any, Optional, Union
 import numpy as np
 from lark import Lark
 from lark.lexer import Lexer
-from lark.exceptions import UnexpectedInput, VisitError
+from lark.exceptions import UnexpectedInput, UnexpectedToken, VisitError
 
 from .errors import Source, VRMLError
 from .fields import FIELD_TYPES, FieldType, NumberError, parse_numbers, unquote_string
@@ -839,6 +839,80 @@ def _get_parser():
     return _parser, _builder
 
 
+_driver: Optional[tuple] = None
+
+
+def _parse(parser: Lark, text: str):
+    """``parser.parse(text)`` by a loop of our own over lark's LALR table (built from
+    the grammar, as ever): lark's generic loop re-reads its configuration, compares
+    symbols through ``__eq__`` and asserts on every token.  Same results, same errors
+    (``tests/test_vrml_reader.py`` compares the two on generated scenes); if lark's
+    internals ever differ, lark's own loop runs."""
+    global _driver
+    if _driver is None:
+        try:
+            inner = parser.parser.parser.parser
+            table = inner.parse_table
+            start, end = table.start_states["start"], table.end_states["start"]
+            callbacks = inner.callbacks
+            from lark.parsers.lalr_analysis import Shift
+        except (AttributeError, KeyError, ImportError):
+            _driver = ()
+        else:
+            steps = {}
+            for state, actions in table.states.items():
+                row = {}
+                for term, (action, arg) in actions.items():
+                    if action is Shift:
+                        row[term] = (True, arg)
+                    else:
+                        row[term] = (False, (len(arg.expansion), sys.intern(str(arg.origin.name)),
+                                             callbacks[arg]))
+                steps[state] = row
+            _driver = (steps, start, end, _FastLexer(parser.lexer_conf))
+    if not _driver:
+        return parser.parse(text)
+    steps, start, end, lexer = _driver
+    state_stack = [start]
+    value_stack: list = []
+    push_state, push_value = state_stack.append, value_stack.append
+
+    def feed(token, last: bool):
+        while True:
+            try:
+                shift, arg = steps[state_stack[-1]][token.type]
+            except KeyError:
+                expected = {t for t in steps[state_stack[-1]] if t.isupper()}
+                raise UnexpectedToken(token, expected) from None
+            if shift:
+                push_state(arg)
+                push_value(token)
+                return None
+            size, name, callback = arg
+            if size:
+                children = value_stack[-size:]
+                del state_stack[-size:]
+                del value_stack[-size:]
+            else:
+                children = []
+            value = callback(children)
+            push_state(steps[state_stack[-1]][name][1])
+            push_value(value)
+            if last and state_stack[-1] == end:
+                return value_stack[-1]
+
+    for token in lexer.lex(text):
+        # the shift-or-reduce loop inlined for the common case: a token shifted at once
+        row = steps[state_stack[-1]]
+        step = row.get(token.type)
+        if step is not None and step[0]:
+            push_state(step[1])
+            push_value(token)
+        else:
+            feed(token, False)
+    return feed(_Tok("$END", "", len(text), len(text)), True)
+
+
 class _Splice(list):
     """Children of an inlined repetition (lark's ``x*``), spliced into the parent."""
 
@@ -1004,7 +1078,7 @@ def loads(text: str, strict: bool = True, path: Optional[str] = None,
         _FastLexer.current_source = src
         _FastLexer.current_source_strict = bool(strict)
         try:
-            scene = parser.parse(text)
+            scene = _parse(parser, text)
         except VRMLError:
             raise
         except VisitError as e:  # lark wraps errors raised in callbacks on some paths

@@ -1066,7 +1066,7 @@ def loads(text: str, strict: bool = True, path: Optional[str] = None,
                                 ["'#VRML V2.0 utf8'"])
             # Inline fragments and hand-edited files: read as VRML97 all the same
             late = _LATE_HEADER_RE.search(text)
-            message = (f"the VRML97 header is not on the first line but here; read as VRML97"
+            message = ("the VRML97 header is not on the first line but here; read as VRML97"
                        if late else "no VRML97 header ('#VRML V2.0 utf8'); read as VRML97")
             warnings.warn(str(src.error(message, late.start() if late else 0)), VRMLWarning,
                           stacklevel=2)

@@ -340,6 +340,12 @@ def main(argv=None) -> int:
         case3 = "read 4,096 Transform/Shape/Box nodes"
         scenes["4,096 Transforms"] = read_case(case3, tr_path, 2)
 
+        # 3b. a CAD-style export: thousands of small meshes, shared materials
+        cad_path = tmp / "cad.wrl"
+        generate.write_text(cad_path, generate.cad_text(3000, seed=0))
+        case3b = "read CAD-style export (3,000 parts)"
+        scenes["CAD-style export"] = read_case(case3b, cad_path, None)
+
         # 4. writing
         for name, scene in scenes.items():
             secs, text = best_of(lambda: mvrml.dumps(scene), reps)

@@ -11,8 +11,7 @@ command line's ``--help`` does not pay for scipy and the cloner.
 """
 from __future__ import annotations
 
-import importlib
-from typing import Any
+from ._lazy import lazy_names
 
 __version__ = "0.1.0"
 
@@ -37,17 +36,4 @@ __all__ = ["vrml", "standard", "FAP", "FAPU", "FEATURE_POINTS", "VISEMES", "EXPR
            "save_face", "FaceModel", "validate", "clone", "__version__"]
 
 
-def __getattr__(name: str) -> Any:
-    try:
-        module, attribute = _LAZY[name]
-    except KeyError:
-        raise AttributeError(f"module 'mpeg4fba' has no attribute {name!r}") from None
-    value = importlib.import_module(module)
-    if attribute is not None:
-        value = getattr(value, attribute)
-    globals()[name] = value         # later lookups skip this function
-    return value
-
-
-def __dir__() -> list:
-    return sorted(set(globals()) | set(__all__))
+__getattr__, __dir__ = lazy_names(globals(), _LAZY)

@@ -76,17 +76,9 @@ def point_triangle(p: np.ndarray, tri: np.ndarray) -> tuple:
     it falls inside (most rows, when the triangles were chosen near the points), else the
     nearest of the closest points on the three edges (degenerate triangles too)."""
     p = np.asarray(p, dtype=np.float64)
-    a = tri[:, 0]
-    ab, ac, ap = tri[:, 1] - a, tri[:, 2] - a, p - a
-    d00, d01, d11 = _dot(ab, ab), _dot(ab, ac), _dot(ac, ac)
-    d20, d21 = _dot(ap, ab), _dot(ap, ac)
-    den = d00 * d11 - d01 * d01
-    with np.errstate(divide="ignore", invalid="ignore"):
-        v = (d11 * d20 - d01 * d21) / den
-        w = (d00 * d21 - d01 * d20) / den
-    out = np.stack([1 - v - w, v, w], axis=1)
+    out, sliver = _plane_coordinates(p, tri)
     # a sliver's plane is ill-defined: its rows go the edges' way
-    inside = (out >= 0).all(axis=1) & (den > 1e-12 * d00 * d11)
+    inside = (out >= 0).all(axis=1) & ~sliver
     rest = np.flatnonzero(~inside)
     if len(rest):
         q, corner = p[rest], tri[rest]
@@ -601,18 +593,26 @@ def triangle_neighbours(triangles: np.ndarray) -> np.ndarray:
     return out
 
 
-def _plane_barycentric(P: np.ndarray, tri: np.ndarray) -> np.ndarray:
-    """Barycentric coordinates of the projections of ``P`` (n, 3) on the planes of
-    ``tri`` (n, 3, 3); negative outside the triangle."""
+def _plane_coordinates(P: np.ndarray, tri: np.ndarray) -> tuple:
+    """(barycentric coordinates of the projections of ``P`` (n, 3) on the planes of
+    ``tri`` (n, 3, 3), negative outside the triangle; whether each triangle is a sliver,
+    its squared area under 1e-12 of the product of its two edges' squared lengths)."""
     a = tri[:, 0]
     e1, e2, d = tri[:, 1] - a, tri[:, 2] - a, P - a
-    d00, d01, d11 = (e1 * e1).sum(1), (e1 * e2).sum(1), (e2 * e2).sum(1)
-    d20, d21 = (d * e1).sum(1), (d * e2).sum(1)
+    d00, d01, d11 = _dot(e1, e1), _dot(e1, e2), _dot(e2, e2)
+    d20, d21 = _dot(d, e1), _dot(d, e2)
     den = d00 * d11 - d01 * d01
+    sliver = den <= 1e-12 * d00 * d11
     den = np.where(np.abs(den) > 0, den, np.inf)
     v = (d11 * d20 - d01 * d21) / den
     w = (d00 * d21 - d01 * d20) / den
-    return np.stack([1 - v - w, v, w], axis=1)
+    return np.stack([1 - v - w, v, w], axis=1), sliver
+
+
+def _plane_barycentric(P: np.ndarray, tri: np.ndarray) -> np.ndarray:
+    """Barycentric coordinates of the projections of ``P`` (n, 3) on the planes of
+    ``tri`` (n, 3, 3); negative outside the triangle."""
+    return _plane_coordinates(P, tri)[0]
 
 
 def surface_weights(points: np.ndarray, vertices: np.ndarray, triangles: np.ndarray,

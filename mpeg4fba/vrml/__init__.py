@@ -13,33 +13,20 @@ load numpy, lark and the node catalogue.
 """
 from __future__ import annotations
 
-import importlib
-from typing import Any
-
+from .._lazy import lazy_names
 from .errors import VRMLError
 from .inflate import inflate_limits
 
-_LAZY = {
-    **{name: "catalogue" for name in ("NODE_TYPES", "VRML97_NODES", "FieldDecl", "NodeType")},
-    **{name: "fields" for name in ("FIELD_TYPES", "FieldType", "Image")},
-    **{name: "reader" for name in ("VRMLWarning", "load", "loads")},
-    **{name: "scene" for name in ("ExternProto", "Node", "Proto", "RawValue", "Route", "Scene")},
-    **{name: "writer" for name in ("dump", "dumps")},
-}
+_LAZY = {name: (f"{__name__}.{module}", name) for module, names in (
+    ("catalogue", ("NODE_TYPES", "VRML97_NODES", "FieldDecl", "NodeType")),
+    ("fields", ("FIELD_TYPES", "FieldType", "Image")),
+    ("reader", ("VRMLWarning", "load", "loads")),
+    ("scene", ("ExternProto", "Node", "Proto", "RawValue", "Route", "Scene")),
+    ("writer", ("dump", "dumps"))) for name in names}
 
 __all__ = ["load", "loads", "dump", "dumps", "Scene", "Node", "Proto", "ExternProto", "Route",
            "RawValue", "FieldDecl", "NodeType", "NODE_TYPES", "VRML97_NODES", "FIELD_TYPES",
            "FieldType", "Image", "VRMLError", "VRMLWarning", "inflate_limits"]
 
 
-def __getattr__(name: str) -> Any:
-    module = _LAZY.get(name)
-    if module is None:
-        raise AttributeError(f"module 'mpeg4fba.vrml' has no attribute {name!r}")
-    value = getattr(importlib.import_module(f"{__name__}.{module}"), name)
-    globals()[name] = value
-    return value
-
-
-def __dir__() -> list:
-    return sorted(set(globals()) | set(__all__))
+__getattr__, __dir__ = lazy_names(globals(), _LAZY)

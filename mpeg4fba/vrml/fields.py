@@ -449,8 +449,10 @@ class FieldType:
     def format_parts(self, value: Any, indent: str = "") -> list:
         """:meth:`format` as a list of pieces: a long MF number list in blocks, so a
         writer can send a big mesh out without ever holding its whole text."""
-        if not (self.mf and self.kind in ("int", "float")) or len(value) < 2:
+        if not (self.mf and self.kind in ("int", "float")):
             return [self.format(value, indent)]
+        if len(value) == 0:
+            return ["[]"]
         inner = indent + "  "
         if self.kind == "int":
             parts, sep = _int_parts(np.asarray(value).reshape(-1), inner)
@@ -458,6 +460,8 @@ class FieldType:
             flat = np.asarray(value, dtype=np.float64).reshape(-1)
             _check_finite(flat)
             parts, sep = _float_parts(flat, self.width if self.width > 1 else 10, inner)
+        if len(value) == 1:
+            return parts                                # one value: no brackets
         if len(parts) == 1:
             text = parts[0]
             if "\n" in text or len(text) > 60:
@@ -481,19 +485,7 @@ class FieldType:
                 return "[ " + " ".join(map(quote_string, value)) + " ]" if len(value) < 4 else \
                     "[\n" + indent + "  " + (",\n" + indent + "  ").join(map(quote_string, value)) \
                     + "\n" + indent + "]"
-            n = len(value)
-            if n == 0:
-                return "[]"
-            inner = indent + "  "
-            if k == "int":
-                text = _format_ints(np.asarray(value).reshape(-1), inner)
-            else:
-                text = format_floats(value, self.width if self.width > 1 else 10, inner)
-            if n == 1:
-                return text
-            if "\n" in text or len(text) > 60:
-                return "[\n" + inner + text + "\n" + indent + "]"
-            return "[ " + text + " ]"
+            return "".join(self.format_parts(value, indent))
         if k == "bool":
             return "TRUE" if value else "FALSE"
         if k == "string":
@@ -507,12 +499,6 @@ class FieldType:
         if self.width == 1:
             return format_float(value)
         return " ".join(map(format_float, value))
-
-
-def _format_ints(values: np.ndarray, indent: str) -> str:
-    """:func:`_format_index_list` of a whole array, a block at a time (same text)."""
-    parts, sep = _int_parts(values, indent)
-    return sep.join(parts)
 
 
 def _int_parts(values: np.ndarray, indent: str) -> tuple:

@@ -182,20 +182,16 @@ class _FastLexer(Lexer):
             if m is None:
                 break
             i = m.lastindex
+            is_id = i == g_id
             if lenient:
                 if i == g_num and text[m.start(i)] in "nN" and self.named_nan(text, m, prev):
                     m = self.master.match(text, pos)   # a name after all: DEF nan, USE nan
-                    i = g_id
-                    start, pos = m.start(self.groups[0]), m.end()
-                    v = m.group(self.groups[0])
-                    m = None
-                prev = v if m is None else (m.group(i) if i == g_id else "")
-            if m is not None:
-                start = m.start(i)
-                pos = m.end()
-            if i == g_id:
-                if m is not None:
-                    v = m.group(i)
+                    i, is_id = self.groups[0], True
+                prev = m.group(i) if is_id else ""
+            start = m.start(i)
+            pos = m.end()
+            if is_id:
+                v = m.group(i)
                 kind = words.get(v)
                 if kind is None:
                     kind = self.word_type(v)
@@ -840,6 +836,15 @@ def _get_parser():
 
 
 _driver: Optional[tuple] = None
+_lexer: Optional[_FastLexer] = None
+
+
+def _shared_lexer(parser: Lark) -> _FastLexer:
+    """One lexer for :func:`_parse` and :func:`parse_value` (its regexes compiled once)."""
+    global _lexer
+    if _lexer is None:
+        _lexer = _FastLexer(parser.lexer_conf)
+    return _lexer
 
 
 def _parse(parser: Lark, text: str):
@@ -869,7 +874,7 @@ def _parse(parser: Lark, text: str):
                         row[term] = (False, (len(arg.expansion), sys.intern(str(arg.origin.name)),
                                              callbacks[arg]))
                 steps[state] = row
-            _driver = (steps, start, end, _FastLexer(parser.lexer_conf))
+            _driver = (steps, start, end, _shared_lexer(parser))
     if not _driver:
         return parser.parse(text)
     steps, start, end, lexer = _driver
@@ -1159,7 +1164,7 @@ def parse_value(ftype: FieldType, text: str, where: str = "value") -> Any:
     """
     from .catalogue import FieldDecl
     parser, builder = _get_parser()
-    lexer = _FastLexer(parser.lexer_conf)
+    lexer = _shared_lexer(parser)
     src = Source(text, where)
     with _lock:
         _FastLexer.current_source = src

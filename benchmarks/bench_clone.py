@@ -81,7 +81,7 @@ def growth() -> int:
     warnings.simplefilter("ignore")
     rows = []
     print("solver: SuperLU (scipy), the fill-reducing order found once per pattern and "
-          "reused (mpeg4fba.cloning.surface.SPDFactoriser)")
+          "reused (mpeg4fba.cloning.registration.SPDFactoriser)")
     print(f"{'vertices':>10s} {'set-up s':>9s} {'tables':>7s} {'clone s':>8s} {'per table ms':>13s}"
           f" {'total s':>8s}")
     for r in GROWTH_RESOLUTIONS:

@@ -11,8 +11,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from mpeg4fba.cloning import CloneWarning, FacialMotionCloner
-from mpeg4fba.cloning.surface import (boundary_loops, loop_correspondence, neck_cut,
-                                      surface_biharmonic)
+from mpeg4fba.cloning.registration import surface_biharmonic
+from mpeg4fba.cloning.surface import boundary_loops, loop_correspondence, neck_cut
 from mpeg4fba.fba.fat import FAT
 from mpeg4fba.fba.featurepoints import FeaturePointSet
 from mpeg4fba.models import reference_head

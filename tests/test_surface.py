@@ -6,8 +6,9 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from mpeg4fba.cloning.registration import register_surface
 from mpeg4fba.cloning.surface import (boundary_loops, closest_points, feature_warp, point_triangle,
-                                      register_surface, surface_weights, triangle_neighbours)
+                                      surface_weights, triangle_neighbours)
 from mpeg4fba.models import reference_head
 
 from _meshes import grid, tube

@@ -13,7 +13,8 @@ and :mod:`~mpeg4fba.cloning.rigid` (eyes, teeth, tongue, head), :mod:`~mpeg4fba.
 (feature points on the mesh, in its units), :mod:`~mpeg4fba.cloning.detect` (feature
 points found on a head that has none; :mod:`~mpeg4fba.cloning.autopoints` gives a face
 the ones it lacks), :mod:`~mpeg4fba.cloning.points` (the points the method needs),
-:mod:`~mpeg4fba.cloning.surface` (closest points, warp, registration on meshes).
+:mod:`~mpeg4fba.cloning.surface` (closest points, warp, normals on meshes),
+:mod:`~mpeg4fba.cloning.registration` (the non-rigid ICP and its sparse solves).
 
 The steps of the method, one module each, in the order
 :class:`~mpeg4fba.cloning.fmc.FacialMotionCloner` (:mod:`~mpeg4fba.cloning.fmc`) runs

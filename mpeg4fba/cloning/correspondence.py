@@ -26,7 +26,7 @@ the mapping places on a source feature point the target lacks.
 References: I. S. Pandzic, "Facial Motion Cloning", Graphical Models 65(6), 2003,
 section "Aligning source and target face"; B. Amberg, S. Romdhani, T. Vetter, "Optimal
 Step Nonrigid ICP Algorithms for Surface Registration", CVPR 2007 (the fit of
-:func:`~mpeg4fba.cloning.surface.register_surface`).
+:func:`~mpeg4fba.cloning.registration.register_surface`).
 
 >>> AlignOptions().alignment, AlignOptions(alignment="paper").register
 ('surface', True)
@@ -44,10 +44,9 @@ from ..fba.requirements import NOT_SURFACE
 from .alignment import align
 from .errors import CloneWarning
 from .skin import Skin, mesh_groups
-from .surface import (REGISTRATION_FINE_SCALES, REGISTRATION_MEMBRANE, SPDFactoriser,
-                      closest_points,
-                      feature_warp, loop_correspondence, neck_cut, register_surface,
-                      surface_biharmonic)
+from .registration import (REGISTRATION_FINE_SCALES, REGISTRATION_MEMBRANE, SPDFactoriser,
+                           register_surface, surface_biharmonic)
+from .surface import closest_points, feature_warp, loop_correspondence, neck_cut
 
 __all__ = ["ALIGNMENTS", "NECK_RATIO", "DERIVE_DISTANCE",
            "AlignOptions", "Correspondence", "correspond", "paper_alignment",
@@ -66,7 +65,7 @@ __all__ = ["ALIGNMENTS", "NECK_RATIO", "DERIVE_DISTANCE",
 #: 3. with ``register=True``, the target's main skin is fitted onto the source's by a
 #:    non-rigid ICP whose stiffness (thin plate and membrane, ``membrane``) relaxes
 #:    from the size of the face to a sixteenth of it, feature points held
-#:    (:func:`~mpeg4fba.cloning.surface.register_surface`).  The warp is exact only
+#:    (:func:`~mpeg4fba.cloning.registration.register_surface`).  The warp is exact only
 #:    at the feature points; between them a surface can end up at the right place but
 #:    slid along itself (a throat displaced down the neck, the underside of the chin
 #:    shifted back), which a closest point can't see and the fit corrects, since a
@@ -74,7 +73,7 @@ __all__ = ["ALIGNMENTS", "NECK_RATIO", "DERIVE_DISTANCE",
 #: 4. each vertex goes to its closest point on the source's surface (of its mesh
 #:    group), whose 2D position is its aligned position for the lip and eyelid regions;
 #: 5. with ``register=True`` and ``refine=True``, the fit goes on to a sixty-fourth of
-#:    the face (:data:`~mpeg4fba.cloning.surface.REGISTRATION_FINE_SCALES`), feature
+#:    the face (:data:`~mpeg4fba.cloning.registration.REGISTRATION_FINE_SCALES`), feature
 #:    points held, and its result is the surface points the surface weights are taken
 #:    at; the regions stay with step 4, since a vertex following the source's facets
 #:    can cross the mouth's mid line.
@@ -144,11 +143,11 @@ class AlignOptions:
     register : bool
         Fit the target's main skin onto the source's (step 3 of :data:`ALIGNMENTS`).
     refine : bool
-        Go on to :data:`~mpeg4fba.cloning.surface.REGISTRATION_FINE_SCALES` for the
+        Go on to :data:`~mpeg4fba.cloning.registration.REGISTRATION_FINE_SCALES` for the
         surface points (step 5).
     membrane : float
         The fit's membrane term against its thin plate
-        (:data:`~mpeg4fba.cloning.surface.REGISTRATION_MEMBRANE`).
+        (:data:`~mpeg4fba.cloning.registration.REGISTRATION_MEMBRANE`).
     by_mesh : bool
         Closest points on the source mesh that is each target mesh's counterpart
         (:func:`~mpeg4fba.cloning.skin.mesh_groups`).
@@ -254,7 +253,7 @@ def register_skin(source: Skin, target: Skin, warped: np.ndarray, *,
                   membrane: float = REGISTRATION_MEMBRANE, scales: Optional[tuple] = None,
                   factorise: Optional[SPDFactoriser] = None) -> np.ndarray:
     """``warped`` with the target's main skin fitted onto the source's main skin
-    (:func:`~mpeg4fba.cloning.surface.register_surface`, over ``scales``, by default
+    (:func:`~mpeg4fba.cloning.registration.register_surface`, over ``scales``, by default
     its own), its feature points held."""
     if source.main is None or target.main is None:
         return warped

@@ -30,7 +30,7 @@ Route (each step a function below), the face's structure found in order:
    followed from the stomion: commissures at its ends, inner corners and inner-lip
    midpoints along it.
 7. **Registration**: the template's skin is bent onto the target's
-   (:func:`~mpeg4fba.cloning.surface.register_surface`, coarse to fine), held at the
+   (:func:`~mpeg4fba.cloning.registration.register_surface`, coarse to fine), held at the
    points of steps 4-6, and every template point is carried to the closest point of the
    target's surface; the points of steps 4-6 then replace the carried ones.
 8. **Convention points** (:data:`CONVENTION`, :func:`_convention_points`): the points no
@@ -92,8 +92,8 @@ from ..fba.featurepoints import FeaturePointSet, normalise_id, point_order
 from ..fba.requirements import FAPU_POINTS, PART_POINTS, required_points
 from .alignment import REQUIRED_POINTS
 from .parts import is_eyeball, mesh_components
-from .surface import (boundary_loops, closest_points, feature_warp, onto_same_sheet,
-                      register_surface, vertex_normals)
+from .registration import register_surface
+from .surface import (boundary_loops, closest_points, feature_warp, onto_same_sheet, vertex_normals)
 
 __all__ = ["FaceNotFoundError", "FoundPoints", "find_feature_points", "snap_points", "PART_OF",
            "CRISP_POINTS", "TEMPLATE_ES_MM", "FIT_LIMIT", "SYMMETRY_LIMIT"]

@@ -81,7 +81,7 @@ from .parts import PART_SPECS, find_parts, match_parts, separate_parts, source_t
 from .points import REQUIRED_POINTS, check_faces, required_points_missing
 from .projection import MOUTH_ANGLE
 from .skin import Skin
-from .surface import REGISTRATION_MEMBRANE
+from .registration import REGISTRATION_MEMBRANE
 from .transfer import map_skin, mesh_entries, motion_scale, source_skin_motion
 from .weights import (FACING, FACING_RESOLUTION, INTERPOLATIONS, OUTSIDE_RULES, OVERLAP_RULES,
                       WeightOptions, mapping_weights, slit_labels, visible_triangles)
@@ -139,12 +139,12 @@ class FacialMotionCloner:
         with the paper's.
     membrane : float
         The registration's membrane term against its thin plate
-        (:data:`~mpeg4fba.cloning.surface.REGISTRATION_MEMBRANE`), 0 for the thin plate alone.
+        (:data:`~mpeg4fba.cloning.registration.REGISTRATION_MEMBRANE`), 0 for the thin plate alone.
     facing : float
         With the surface interpolation, how much a source sheet facing against the target
         vertex counts against it (:data:`FACING`), 0 to turn it off.
     refine : bool
-        Go on to :data:`~mpeg4fba.cloning.surface.REGISTRATION_FINE_SCALES` for the
+        Go on to :data:`~mpeg4fba.cloning.registration.REGISTRATION_FINE_SCALES` for the
         surface points, the regions staying with the stiffer fit.
     correspondence : Correspondence or callable, optional
         In place of the correspondence step

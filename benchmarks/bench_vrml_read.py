@@ -31,6 +31,7 @@ import json
 import os
 import platform
 import pstats
+import shutil
 import subprocess
 import sys
 import tempfile
@@ -79,6 +80,44 @@ def load_peer():
         return children
 
     return parse, label
+
+
+THREE_SCRIPT = Path(__file__).resolve().parent / "peers" / "three_vrml.mjs"
+
+
+def load_three():
+    """``(time(paths, reps) -> {path: seconds}, label)`` for three.js's VRMLLoader run by
+    ``node``, or ``(None, reason)``.  The ``three`` package is looked for in
+    ``$MPEG4FBA_THREE`` (its folder), else wherever ``node`` resolves it from
+    ``benchmarks/peers`` (a ``node_modules`` above it, or ``NODE_PATH``)."""
+    node = shutil.which("node")
+    if node is None:
+        return None, "three.js peer skipped: no `node` on PATH"
+    three = os.environ.get("MPEG4FBA_THREE")
+    if not three:
+        r = subprocess.run([node, "-p", "require.resolve('three/package.json')"],
+                           cwd=THREE_SCRIPT.parent, capture_output=True, text=True)
+        if r.returncode != 0:
+            return None, ("three.js peer skipped: the `three` npm package is not installed "
+                          "(npm install three, then set MPEG4FBA_THREE to node_modules/three)")
+        three = str(Path(r.stdout.strip()).parent)
+    try:
+        version = json.loads((Path(three) / "package.json").read_text())["version"]
+    except (OSError, ValueError, KeyError) as e:
+        return None, f"three.js peer skipped: {three} is not the three package ({e})"
+
+    def run(paths, reps):
+        r = subprocess.run([node, str(THREE_SCRIPT), three, str(reps)] + [str(p) for p in paths],
+                           capture_output=True, text=True)
+        out = {}
+        for line in r.stdout.splitlines():
+            rec = json.loads(line)
+            out[rec["file"]] = rec.get("best_s", rec.get("error", "failed"))
+        if r.returncode != 0 and not out:
+            raise RuntimeError(r.stderr.strip()[-300:])
+        return out
+
+    return run, f"three.js {version} VRMLLoader"
 
 
 # -- memory (a fresh subprocess per measurement) --------------------------------------------
@@ -162,7 +201,7 @@ class Results:
     def __init__(self):
         self.rows = []  # dicts for the final table
 
-    def speed(self, case, nbytes, seconds, target=None, peer=None, note=""):
+    def speed(self, case, nbytes, seconds, target=None, peer=None, note="", three=None):
         """One timed case: print its line now and keep it for the table."""
         mbps = nbytes / MB / seconds
         line = f"{case:<40} {nbytes / MB:8.2f} MB {seconds:9.4f} s {mbps:8.2f} MB/s"
@@ -178,6 +217,15 @@ class Results:
         elif isinstance(peer, str):
             line += f"   | peer: {peer}"
             peer_txt = peer
+        three_txt = three_ratio = "-"
+        if isinstance(three, tuple):
+            tlabel, tsec = three
+            tmbps = nbytes / MB / tsec
+            line += f"   | {tlabel}: {tsec:.4f} s {tmbps:.2f} MB/s, ours/theirs {mbps / tmbps:.1f}x"
+            three_txt, three_ratio = f"{tmbps:.2f} MB/s", f"{mbps / tmbps:.1f}x"
+        elif isinstance(three, str):
+            line += f"   | three.js: {three}"
+            three_txt = three
         if note:
             line += f"   ({note})"
         print(line, flush=True)
@@ -187,22 +235,27 @@ class Results:
                           "met": ("yes" if mbps >= target else "**no**") if target is not None
                           else "-",
                           "peer": peer_txt, "ratio": ratio_txt, "mbps": mbps,
+                          "three": three_txt, "three_ratio": three_ratio,
                           "target_value": target})
 
     def skip(self, case, reason):
         print(f"{case:<40} SKIPPED: {reason}", flush=True)
         self.rows.append({"case": case, "size": "-", "time": "-", "result": f"skipped: {reason}",
-                          "target": "-", "met": "-", "peer": "-", "ratio": "-"})
+                          "target": "-", "met": "-", "peer": "-", "ratio": "-",
+                          "three": "-", "three_ratio": "-"})
 
     def other(self, case, nbytes, result, target, met):
         self.rows.append({"case": case, "size": f"{nbytes / MB:.2f}", "time": "-",
                           "result": result, "target": target,
-                          "met": "yes" if met else "**no**", "peer": "-", "ratio": "-"})
+                          "met": "yes" if met else "**no**", "peer": "-", "ratio": "-",
+                          "three": "-", "three_ratio": "-"})
 
-    def table(self, peer_label) -> str:
+    def table(self, peer_label, three_label=None) -> str:
         head = ["Case", "Size (MB)", "Best time (s)", "Result", "Target", "Met",
-                f"{peer_label or 'Peer'}", "Ours / peer"]
-        keys = ["case", "size", "time", "result", "target", "met", "peer", "ratio"]
+                f"{peer_label or 'Peer'}", "Ours / peer", three_label or "three.js",
+                "Ours / three.js"]
+        keys = ["case", "size", "time", "result", "target", "met", "peer", "ratio", "three",
+                "three_ratio"]
         lines = ["| " + " | ".join(head) + " |", "|" + "|".join("---" for _ in head) + "|"]
         for r in self.rows:
             lines.append("| " + " | ".join(str(r[k]) for k in keys) + " |")
@@ -245,7 +298,8 @@ def try_loads(text: str):
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--quick", action="store_true", help="best of 1 instead of best of 3")
-    ap.add_argument("--no-peer", action="store_true", help="do not try PyVRML97")
+    ap.add_argument("--no-peer", action="store_true",
+                    help="do not try the peers (PyVRML97, three.js)")
     ap.add_argument("--profile", action="store_true",
                     help="cProfile the read cases that miss their target (top 10 cumulative)")
     ap.add_argument("--ifs-mb", type=float, default=50.0,
@@ -268,9 +322,18 @@ def main(argv=None) -> int:
     else:
         print(f"# peer: {peer_label} (vrml.vrml97.parser.buildParser().parse(text))")
 
+    if args.no_peer:
+        three, three_label = None, "three.js disabled (--no-peer)"
+    else:
+        three, three_label = load_three()
+    print(f"# {'peer: ' if three else ''}{three_label}")
+    if three is None:
+        three_note, three_label = three_label, None
+
     res = Results()
     to_profile = []  # (case, fn) that missed their target
     scenes = {}
+    read_mbps = {}    # scene name -> read MB/s, for writing's ratio to it
 
     def read_case(case, path, target, nbytes=None):
         nbytes = nbytes if nbytes is not None else os.path.getsize(path)
@@ -283,7 +346,14 @@ def main(argv=None) -> int:
                 pinfo = f"failed ({type(e).__name__}: {str(e)[:80]})"
         else:
             pinfo = None
-        res.speed(case, nbytes, secs, target, pinfo)
+        tinfo = None
+        if three is not None:
+            try:
+                got = three([path], reps)[str(path)]
+                tinfo = (three_label, got) if isinstance(got, float) else f"failed ({got[:80]})"
+            except Exception as e:  # node crashing, say: the case still counts for us
+                tinfo = f"failed ({type(e).__name__}: {str(e)[:80]})"
+        res.speed(case, nbytes, secs, target, pinfo, three=tinfo)
         if target is not None and nbytes / MB / secs < target:
             to_profile.append((case, lambda: mvrml.load(path)))
         gc.collect()
@@ -298,6 +368,7 @@ def main(argv=None) -> int:
         waist = shared / WAIST
         if waist.is_file():
             scenes["WAIST.wrl"] = read_case(case1, waist, 40)
+            read_mbps["WAIST.wrl"] = res.rows[-1]["mbps"]
         else:
             res.skip(case1, f"{waist} not found (set MPEG4FBA_SHARED)")
 
@@ -339,18 +410,23 @@ def main(argv=None) -> int:
         generate.write_text(tr_path, generate.transforms_text(4096, seed=0))
         case3 = "read 4,096 Transform/Shape/Box nodes"
         scenes["4,096 Transforms"] = read_case(case3, tr_path, 2)
+        read_mbps["4,096 Transforms"] = res.rows[-1]["mbps"]
 
         # 3b. a CAD-style export: thousands of small meshes, shared materials
         cad_path = tmp / "cad.wrl"
         generate.write_text(cad_path, generate.cad_text(3000, seed=0))
         case3b = "read CAD-style export (3,000 parts)"
         scenes["CAD-style export"] = read_case(case3b, cad_path, None)
+        read_mbps["CAD-style export"] = res.rows[-1]["mbps"]
 
         # 4. writing
         for name, scene in scenes.items():
             secs, text = best_of(lambda: mvrml.dumps(scene), reps)
-            res.speed(f"write {name} (dumps)", len(text.encode("utf-8")), secs,
-                      note="size = output text")
+            out_bytes = len(text.encode("utf-8"))
+            ratio = out_bytes / MB / secs / read_mbps[name]
+            res.speed(f"write {name} (dumps)", out_bytes, secs,
+                      note=f"size = output text; {ratio:.2f}x the reading speed "
+                      f"(issue 20: >= 1x) {'met' if ratio >= 1 else 'MISSED'}")
 
         # 5. the lexer on blank runs
         print("\n# lexer growth on blank runs (ms, best of reps)")
@@ -372,8 +448,10 @@ def main(argv=None) -> int:
 
     if peer is None:
         print(f"# no peer ratios: {peer_note}")
+    if three is None:
+        print(f"# {three_note}")
 
-    print("\n" + res.table(peer_label))
+    print("\n" + res.table(peer_label, three_label))
     return 0
 
 

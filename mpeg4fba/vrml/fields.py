@@ -36,6 +36,7 @@ from typing import Any, Optional
 import numpy as np
 
 from .._numbers import fromstring
+from .numtext import VECTOR_MIN, float_text, int_text
 
 __all__ = ["FieldType", "FIELD_TYPES", "Image", "NumberError", "parse_numbers",
            "format_floats", "format_float", "quote_string", "unquote_string"]
@@ -257,8 +258,9 @@ def _float_parts(flat: np.ndarray, per_line: int, indent: str) -> tuple:
     """(texts of blocks of ``flat``, the separator between them): a block at a time, as
     a list of Python floats and their strings costs ~100 bytes a number."""
     step = _BLOCK - _BLOCK % per_line if per_line else _BLOCK
-    parts = [_join(list(map(repr, flat[i:i + step].tolist())), per_line, indent,
-                   _TRAILING_ZERO_RE) for i in range(0, len(flat), step)]
+    parts = [float_text(block, per_line, indent) if len(block) >= VECTOR_MIN else
+             _join(list(map(repr, block.tolist())), per_line, indent, _TRAILING_ZERO_RE)
+             for block in (flat[i:i + step] for i in range(0, len(flat), step))]
     return parts, ((",\n" + indent) if per_line else " ")
 
 
@@ -504,9 +506,9 @@ class FieldType:
 def _int_parts(values: np.ndarray, indent: str) -> tuple:
     """(texts of blocks of ``values``, the separator between them)."""
     n = len(values)
+    faces = n > 8 and bool((values[:64] == -1).any())   # an index list: a face to a line
     if n <= _BLOCK:
-        return [_format_index_list(list(map(str, values.tolist())), indent)], ""
-    faces = bool((values[:64] == -1).any())
+        return [_int_block(values, indent, faces)], ""
     if faces:
         # cut just after a -1, so each block's last face ends where the block does
         ends = np.flatnonzero(values == -1) + 1
@@ -516,16 +518,25 @@ def _int_parts(values: np.ndarray, indent: str) -> tuple:
     else:
         cuts = np.arange(_BLOCK, n, _BLOCK)         # multiples of 16: whole lines
     bounds = np.concatenate([[0], cuts, [n]])
-    parts = [_format_index_list(list(map(str, values[a:b].tolist())), indent)
+    parts = [_int_block(values[a:b], indent, faces)
              for a, b in zip(bounds[:-1].tolist(), bounds[1:].tolist())]
     return parts, ",\n" + indent
 
 
-def _format_index_list(items: list, indent: str) -> str:
-    """Integers, a line per face (-1 ends a face) when they look like an index list."""
-    if "-1" in items[: 64] and len(items) > 8:
-        text = " ".join(items).replace(" -1 ", " -1,\n" + indent)
-        return text
+def _int_block(values: np.ndarray, indent: str, faces: bool) -> str:
+    """Integers: with ``faces``, a line break after each -1 but the last; else 16 to a
+    line."""
+    if len(values) >= VECTOR_MIN:
+        return int_text(values, indent, faces)
+    items = list(map(str, values.tolist()))
+    if faces:
+        nl = ",\n" + indent
+        out = []
+        for item in items:
+            out.append(item)
+            out.append(nl if item == "-1" else " ")
+        out.pop()
+        return "".join(out)
     if len(items) > 16:
         return (",\n" + indent).join(" ".join(items[i:i + 16]) for i in range(0, len(items), 16))
     return " ".join(items)

@@ -16,6 +16,7 @@ Example
 from __future__ import annotations
 
 import difflib
+import gc
 import os
 import re
 import sys
@@ -389,8 +390,10 @@ class _Builder:
                        pos, [f"a{'n' if accepts[0][0] in 'aeiou' else ''} {accepts[0]} node"
                              if len(accepts) == 1 else f"one of these node kinds: {', '.join(accepts)}"])
 
-    def convert(self, d, value, where: str, extra_ok: bool = False) -> Any:
-        """The typed value of declaration ``d`` from what the grammar gave."""
+    def convert(self, d, value, owner: str, name: str = "", extra_ok: bool = False) -> Any:
+        """The typed value of declaration ``d`` from what the grammar gave, for field
+        ``name`` of ``owner`` (named in errors as "owner.name"; a field is read far more
+        often than it is wrong, so the name is only put together for an error)."""
         ftype = d.type
         kind = ftype.kind
         if isinstance(value, _Tok):
@@ -412,7 +415,7 @@ class _Builder:
                 if extra_ok and not ftype.mf and kind != "image" and len(nums) > ftype.width:
                     # Seen in the wild: "field SFInt32 x 0 0 0".  The first value is
                     # unambiguous; the rest is dropped with a warning, not an error.
-                    self.warn(f"extra:{where}", f"{where} is {ftype.name}: {len(nums)} numbers "
+                    self.warn(f"extra:{self.where(owner, name)}", f"{self.where(owner, name)} is {ftype.name}: {len(nums)} numbers "
                               f"given, the first {ftype.width} kept", start)
                     nums = nums[:ftype.width]
                 try:
@@ -420,10 +423,10 @@ class _Builder:
                 except ValueError as e:
                     after = _NEXT_WORD_RE.match(text, end)
                     if after and _NAN_WORD_RE.fullmatch(after.group(1)):
-                        raise self.err(f"{where}: {after.group(1)} is not a VRML97 number (the "
+                        raise self.err(f"{self.where(owner, name)}: {after.group(1)} is not a VRML97 number (the "
                                        "lenient reader, strict=False or --lenient, keeps it "
                                        "with a warning)", after.start(1)) from None
-                    raise self.err(f"{where}: {e}", start) from None
+                    raise self.err(f"{self.where(owner, name)}: {e}", start) from None
             if t == "STRING" and kind == "string":
                 s = unquote_string(value.value)
                 return [s] if ftype.mf else s
@@ -433,46 +436,50 @@ class _Builder:
                 return None
             found = {"NUMBERS": "numbers", "STRING": "a string", "TRUE": "TRUE",
                      "FALSE": "FALSE", "NULL": "NULL"}.get(t, repr(value.value))
-            raise self.err(f"{where} is {ftype.name}: found {found}", value.start_pos,
+            raise self.err(f"{self.where(owner, name)} is {ftype.name}: found {found}", value.start_pos,
                            [_kind_text(ftype)])
         if isinstance(value, self.Node):
             if kind == "node":
-                self.check_class(value, d, where, value._pos)
+                self.check_class(value, d, self.where(owner, name), value._pos)
                 return [value] if ftype.mf else value
-            raise self.err(f"{where} is {ftype.name}: found a {value.type} node", value._pos,
+            raise self.err(f"{self.where(owner, name)} is {ftype.name}: found a {value.type} node", value._pos,
                            [_kind_text(ftype)])
         # a bracketed list
         if not ftype.mf:
-            raise self.err(f"{where} is {ftype.name}, a single value: brackets are for MF fields",
+            raise self.err(f"{self.where(owner, name)} is {ftype.name}, a single value: brackets are for MF fields",
                            value.pos, [_kind_text(ftype)])
         if not value:
             return ftype.empty()
         if kind == "node":
             for item in value:
                 if not isinstance(item, self.Node):
-                    raise self.err(f"{where} is MFNode: found {self.describe(item)}",
+                    raise self.err(f"{self.where(owner, name)} is MFNode: found {self.describe(item)}",
                                    self.pos_of(item), ["nodes"])
-                self.check_class(item, d, where, item._pos)
+                self.check_class(item, d, self.where(owner, name), item._pos)
             return list(value)
         if kind == "string":
             out = []
             for item in value:
                 if not (isinstance(item, _Tok) and item.type == "STRING"):
-                    raise self.err(f"{where} is MFString: found {self.describe(item)}",
+                    raise self.err(f"{self.where(owner, name)} is MFString: found {self.describe(item)}",
                                    self.pos_of(item), ["strings"])
                 out.append(unquote_string(item.value))
             return out
         arrays = []
         for item in value:
             if not (isinstance(item, _Tok) and item.type == "NUMBERS"):
-                raise self.err(f"{where} is {ftype.name}: found {self.describe(item)}",
+                raise self.err(f"{self.where(owner, name)} is {ftype.name}: found {self.describe(item)}",
                                self.pos_of(item), [_kind_text(ftype)])
             arrays.append(self.numbers(item, kind == "int"))
         nums = arrays[0] if len(arrays) == 1 else np.concatenate(arrays)
         try:
             return ftype.from_numbers(nums, True)
         except ValueError as e:
-            raise self.err(f"{where}: {e}", value.pos) from None
+            raise self.err(f"{self.where(owner, name)}: {e}", value.pos) from None
+
+    @staticmethod
+    def where(owner: str, name: str) -> str:
+        return f"{owner}.{name}" if name else owner
 
     def describe(self, item) -> str:
         if isinstance(item, self.Node):
@@ -565,7 +572,9 @@ class _Builder:
         if node.decl is None:
             node.fields[name] = self.raw(value)
             return None
-        d = node.field_decl(name)
+        d = node.decl.fields.get(name) if not node.interface else None
+        if d is None:
+            d = node.field_decl(name)          # an alias, or a Script's own field
         if d is None:
             if self.strict:
                 raise self.unknown_field(node, name, tok.start_pos)
@@ -580,7 +589,7 @@ class _Builder:
             self.warn(f"x3d:{node.type}.{name}", f"{node.type}.{name} is an X3D field, not "
                       "VRML97; accepted" + (f" as {d.name}" if d.name != name else ""),
                       tok.start_pos)
-        node.fields[d.name] = self.convert(d, value, f"{node.type}.{name}")
+        node.fields[d.name] = self.convert(d, value, node.type, name)
         return None
 
     def is_field(self, items):
@@ -662,7 +671,7 @@ class _Builder:
         kind_tok, type_tok, name_tok, value = items
         d, target = self.decl_common(kind_tok, type_tok, name_tok)
         owner = target.type if isinstance(target, self.Node) else target.name
-        d.default = self.convert(d, value, f"{owner}.{d.name}", extra_ok=True)
+        d.default = self.convert(d, value, owner, d.name, extra_ok=True)
         if self.scope.defaults:
             self.scope.defs = {}
         return None
@@ -906,15 +915,26 @@ def _parse(parser: Lark, text: str):
             if last and state_stack[-1] == end:
                 return value_stack[-1]
 
+    # feed()'s loop again, inlined: a call per token costs more than the loop itself
     for token in lexer.lex(text):
-        # the shift-or-reduce loop inlined for the common case: a token shifted at once
-        row = steps[state_stack[-1]]
-        step = row.get(token.type)
-        if step is not None and step[0]:
-            push_state(step[1])
-            push_value(token)
-        else:
-            feed(token, False)
+        ttype = token.type
+        while True:
+            step = steps[state_stack[-1]].get(ttype)
+            if step is None:
+                feed(token, False)                  # raises UnexpectedToken
+            if step[0]:
+                push_state(step[1])
+                push_value(token)
+                break
+            size, name, callback = step[1]
+            if size:
+                children = value_stack[-size:]
+                del state_stack[-size:]
+                del value_stack[-size:]
+            else:
+                children = []
+            push_value(callback(children))
+            push_state(steps[state_stack[-1]][name][1])
     return feed(_Tok("$END", "", len(text), len(text)), True)
 
 
@@ -1082,6 +1102,11 @@ def loads(text: str, strict: bool = True, path: Optional[str] = None,
         builder.reset(src, strict)
         _FastLexer.current_source = src
         _FastLexer.current_source_strict = bool(strict)
+        # A parse makes a few objects per token and frees almost none, so the cyclic
+        # collector would run often and walk everything the program holds, for
+        # nothing: the scene graph has no cycles to collect until the parse is over.
+        collecting = gc.isenabled()
+        gc.disable()
         try:
             scene = _parse(parser, text)
         except VRMLError:
@@ -1093,6 +1118,8 @@ def loads(text: str, strict: bool = True, path: Optional[str] = None,
         except UnexpectedInput as e:
             raise _syntax_error(src, e) from None
         finally:
+            if collecting:
+                gc.enable()
             builder.reset(Source(""), True)
             _FastLexer.current_source = None
             _FastLexer.current_source_strict = True

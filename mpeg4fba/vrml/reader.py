@@ -506,7 +506,7 @@ class _Builder:
                         [repr(c) for c in close] if close else ())
 
     def node_event(self, node, name: str):
-        for d in node.interface:
+        for d in node._interface or ():
             if d.name == name:
                 return d, {"eventIn": "in", "eventOut": "out", "field": "field",
                            "exposedField": "inout"}[d.kind]
@@ -541,6 +541,8 @@ class _Builder:
                                [repr(c) for c in close] if close else ())
             self.warn("node:" + name, f"{name} is not a VRML97 node type; kept as a generic node",
                       tok.start_pos)
+        if decl is not None and decl.name == name:
+            name = decl.name            # one string for all nodes of a type, not one each
         node = self.Node._raw(name, decl, self.src, tok.start_pos)
         if self.pending_def is not None:
             node.name = self.pending_def.value
@@ -572,7 +574,7 @@ class _Builder:
         if node.decl is None:
             node.fields[name] = self.raw(value)
             return None
-        d = node.decl.fields.get(name) if not node.interface else None
+        d = node.decl.fields.get(name) if not node._interface else None
         if d is None:
             d = node.field_decl(name)          # an alias, or a Script's own field
         if d is None:

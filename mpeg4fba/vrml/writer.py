@@ -101,7 +101,7 @@ class _Writer:
             nodes[k] = s
             if s.name:
                 taken.add(s.name)
-            stack.extend(reversed(s.statements))
+            stack.extend(reversed(s._statements or ()))
             stack.extend(reversed(s.children_nodes()))
         serial = 0
         for k, n in nodes.items():
@@ -213,19 +213,22 @@ class _Writer:
         head = (f"DEF {name} " if name else "") + node.type + " {"
         if name:
             self.bound[name] = k
-        if not (node.fields or node.interface or node.is_map or node.statements):
+        # (the private lists: reading the public ones would make them for every node)
+        interface, is_map, statements = node._interface or (), node._is_map or {}, \
+            node._statements or ()
+        if not (node.fields or interface or is_map or statements):
             return [head + " }"]
         ind = _indent(level + 1)
         ops = [head + "\n"]
         # PROTOs declared in the body go first, so every use in the fields follows its
         # declaration; ROUTEs last, after the DEFs they name
-        declared = [s for s in node.statements if isinstance(s, (Proto, ExternProto))]
+        declared = [s for s in statements if isinstance(s, (Proto, ExternProto))]
         for s in declared:
             ops.append(("stmt", s, level + 1))
         interface_names = set()
-        for d in node.interface:
+        for d in interface:
             interface_names.add(d.name)
-            ops.extend(self.declaration(d, node.is_map.get(d.name), level + 1))
+            ops.extend(self.declaration(d, is_map.get(d.name), level + 1))
         for fname, value in node.fields.items():
             ops.append(ind + fname + " ")
             if isinstance(value, RawValue):
@@ -234,10 +237,10 @@ class _Writer:
                 d = node.field_decl(fname)
                 ops.extend(self.value(d.type, value, level + 1))
             ops.append("\n")
-        for fname, pname in node.is_map.items():
+        for fname, pname in is_map.items():
             if fname not in interface_names:
                 ops.append(ind + f"{fname} IS {pname}\n")
-        for s in node.statements:
+        for s in statements:
             if not isinstance(s, (Proto, ExternProto)):
                 ops.append(("stmt", s, level + 1))
         ops.append(_indent(level) + "}")

@@ -12,13 +12,17 @@ Python (``python -c pass``) measured the same way:
 * reading a one-node file (the parser built as well);
 * ``import mpeg4fba`` (the package; its names load on first use);
 * ``mpeg4fba --help`` (``python -m mpeg4fba --help``; subcommands are imported when run);
-* ``mpeg4fba convert`` of a small PROTO file, the whole process.
+* ``mpeg4fba convert`` of a small PROTO file and of a 14 kB one, the whole process,
+  beside Castle Game Engine's ``tovrmlx3d`` converting the same files (where it is on
+  PATH: Debian's view3dscene package has it; skipped with a reason otherwise).
 
-Issue 20's goals: ``--help`` and ``import mpeg4fba.vrml`` under 0.3 s.
+Issue 20's goals: ``--help`` and ``import mpeg4fba.vrml`` under 0.3 s; ``convert`` of a
+small file within 3x of ``tovrmlx3d``.
 """
 from __future__ import annotations
 
 import argparse
+import shutil
 import subprocess
 import sys
 import tempfile
@@ -35,6 +39,18 @@ PROTO Limb [ field SFVec3f size 1 1 1 exposedField SFColor colour 0.8 0.6 0.5 ]
 DEF Body Transform { children [ Limb { size 0.3 0.6 0.2 }
   Transform { translation 0 0.5 0 children Limb { size 0.2 0.2 0.2 } } ] }
 """
+
+
+def proto_file(target: int = 14_000) -> str:
+    """A PROTO file of about ``target`` bytes: SMALL's PROTO, then many instances."""
+    out = [SMALL]
+    i = 0
+    while sum(map(len, out)) < target:
+        i += 1
+        out.append(f"Transform {{ translation {i * 0.25:g} {i % 7 * 0.5:g} 0 rotation 0 1 0 "
+                   f"{i * 0.1:.3g} children [ Limb {{ size {0.1 + i % 5 * 0.05:.3g} 0.4 0.2 "
+                   f"colour {i % 10 / 10:g} 0.5 0.5 }} ] }}\n")
+    return "".join(out)
 
 
 def best(cmd: list, runs: int, cwd: Path) -> float:
@@ -55,7 +71,10 @@ def main(argv=None) -> int:
     with tempfile.TemporaryDirectory(prefix="mpeg4fba-startup-") as tmp:
         small = Path(tmp) / "limbs.wrl"
         small.write_text(SMALL)
+        big = Path(tmp) / "limbs14k.wrl"
+        big.write_text(proto_file())
         out = Path(tmp) / "out.wrl"
+        castle = shutil.which("tovrmlx3d")
         cases = [
             ("bare Python (python -c pass)", [py, "-c", "pass"], None),
             ("import mpeg4fba.vrml", [py, "-c", "import mpeg4fba.vrml"], GOAL),
@@ -66,7 +85,13 @@ def main(argv=None) -> int:
             ("mpeg4fba --help", [py, "-m", "mpeg4fba", "--help"], GOAL),
             (f"mpeg4fba convert ({len(SMALL)} B PROTO file)",
              [py, "-m", "mpeg4fba", "convert", str(small), str(out)], None),
+            (f"mpeg4fba convert ({big.stat().st_size / 1000:.0f} kB PROTO file)",
+             [py, "-m", "mpeg4fba", "convert", str(big), str(out)], None),
         ]
+        peers = {}   # our convert case -> Castle's command on the same file
+        if castle:
+            peers[cases[-2][0]] = [castle, str(small), "--encoding=classic"]
+            peers[cases[-1][0]] = [castle, str(big), "--encoding=classic"]
         print(f"# start-up, best of {args.runs} fresh processes (wall time), Python "
               f"{sys.version.split()[0]}")
         bare = None
@@ -77,6 +102,13 @@ def main(argv=None) -> int:
             verdict = "" if goal is None else f"   goal < {goal} s: {'met' if t < goal else 'MISSED'}"
             print(f"{name:<45} {t:6.3f} s  ({t - bare:+.3f} s over bare Python){verdict}")
             rows.append((name, t, goal))
+            if name in peers:
+                c = best(peers[name], args.runs, REPO)
+                print(f"{'  Castle tovrmlx3d, same file':<45} {c:6.3f} s  ours/theirs "
+                      f"{t / c:.1f}x   goal <= 3x: {'met' if t <= 3 * c else 'MISSED'} "
+                      f"(bare Python alone is {bare / c:.1f}x)")
+            elif "convert" in name and not castle:
+                print("  Castle tovrmlx3d: skipped (not on PATH; Debian: apt install view3dscene)")
     print("\nREADME rows:")
     for name, t, goal in rows[1:]:
         print(f"| start-up: {name} (`benchmarks/bench_startup.py`) | - | {t:.2f} s "

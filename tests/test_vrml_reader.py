@@ -1,6 +1,7 @@
 """Reader and writer behaviour, case by case: what VRML97 allows and what it rejects."""
 import gzip
 import warnings
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -569,3 +570,31 @@ def test_our_lalr_loop_and_larks_give_the_same_scenes_and_errors(body, monkeypat
     ours = outcome()
     monkeypatch.setattr(reader, "_parse", lambda parser, text: parser.parse(text))
     assert outcome() == ours
+
+
+def test_parser_table_cache(tmp_path):
+    """The parser's tables are cached between processes; a damaged cache file is
+    rebuilt, and MPEG4FBA_CACHE=off keeps none."""
+    import os
+    import subprocess
+    import sys
+    code = ("import mpeg4fba.vrml as v; s = v.loads('#VRML V2.0 utf8\\nGroup { children "
+            "Shape {} }'); print(s.nodes[0]['children'][0].type)")
+    repo = Path(__file__).resolve().parents[1]
+    env = dict(os.environ, MPEG4FBA_CACHE=str(tmp_path / "c"), PYTHONPATH=str(repo))
+
+    def run(env):
+        r = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True,
+                           text=True, timeout=120)
+        assert r.returncode == 0, r.stderr
+        assert r.stdout.strip() == "Shape"
+        return r
+
+    run(env)
+    files = list((tmp_path / "c").iterdir())
+    assert len(files) == 1 and files[0].stat().st_size > 1000
+    files[0].write_bytes(b"not a cache\n" + os.urandom(200))
+    assert run(env).stderr == ""
+    assert files[0].stat().st_size > 1000              # rewritten
+    run(dict(env, MPEG4FBA_CACHE="off", XDG_CACHE_HOME=str(tmp_path / "x")))
+    assert not (tmp_path / "x").exists()

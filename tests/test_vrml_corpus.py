@@ -117,3 +117,32 @@ def test_extension_lenient_round_trips(corpus_row, corpus_dir):
     kinds = Counter(n.type for n in scene)
     assert all(kinds[t] for t in corpus_row["_types"]), (
         f"the lenient scene lost a non-VRML97 node: {corpus_row['_types']} vs {sorted(kinds)}")
+
+
+# -- the reader's own LALR loop against lark's, on every file --------------------------------
+
+def test_every_file_reads_the_same_with_larks_loop(corpus_manifest, corpus_dir):
+    """lark's own parse loop is the reference for the reader's faster one: on every
+    corpus file, strict and lenient, both give equal scenes or the same error."""
+    from mpeg4fba.vrml import reader
+
+    def outcome(path, strict):
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", vrml.VRMLWarning)
+            try:
+                return vrml.load(path, strict=strict)
+            except vrml.VRMLError as e:
+                return str(e)
+
+    rows = [(corpus_dir / r["local_path"], strict) for r in corpus_manifest
+            for strict in ((True, False) if r["_role"] == "extension" else (True,))]
+    ours = [outcome(p, s) for p, s in rows]
+    saved = reader._parse
+    reader._parse = lambda parser, text: parser.parse(text)
+    try:
+        theirs = [outcome(p, s) for p, s in rows]
+    finally:
+        reader._parse = saved
+    differ = [str(p) for (p, _), a, b in zip(rows, ours, theirs) if a != b]
+    assert not differ, f"{len(differ)} of {len(rows)} files differ: {differ[:5]}"
+    assert sum(isinstance(a, vrml.Scene) for a in ours) > len(rows) // 2

@@ -315,3 +315,51 @@ def test_mutated_corpus_files_fail_only_with_vrml_error(small_positives, data):
     # Any other exception (IndexError, RecursionError, ...) propagates and fails.
     assert isinstance(result, Scene)
     event("accepted")
+
+
+# -- our LALR loop against lark's own, the reference ----------------------------------------
+
+def _with_both_loops(text: str, strict: bool = True, path=None) -> tuple:
+    """(outcome with the reader's own LALR loop, outcome with lark's): a Scene, or the
+    text of the VRMLError raised."""
+    from mpeg4fba.vrml import reader
+
+    def outcome():
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", vrml.VRMLWarning)
+            try:
+                return vrml.loads(text, strict=strict, path=path)
+            except vrml.VRMLError as e:
+                return str(e)
+
+    ours = outcome()
+    saved = reader._parse
+    reader._parse = lambda parser, text: parser.parse(text)
+    try:
+        theirs = outcome()
+    finally:
+        reader._parse = saved
+    return ours, theirs
+
+
+@settings(max_examples=60, **COMMON)
+@given(data=st.data())
+def test_generated_scenes_read_the_same_with_larks_loop(data):
+    scene, _ = data.draw(scenes(name_shared=data.draw(st.booleans())))
+    ours, theirs = _with_both_loops(vrml.dumps(scene))
+    assert isinstance(ours, Scene) and ours == theirs
+
+
+@settings(max_examples=300, **COMMON)
+@given(data=st.data())
+def test_mutated_files_read_or_fail_the_same_with_larks_loop(small_positives, data):
+    path, original = small_positives[data.draw(st.integers(0, len(small_positives) - 1),
+                                               label="file")]
+    buf = bytearray(original)
+    for _ in range(data.draw(st.integers(1, 3), label="mutations")):
+        buf = _mutate(data, buf)
+    text = bytes(buf).decode("utf-8", "surrogateescape")
+    strict = data.draw(st.booleans(), label="strict")
+    ours, theirs = _with_both_loops(text, strict, path)
+    assert ours == theirs
+    event("same error" if isinstance(ours, str) else "same scene")

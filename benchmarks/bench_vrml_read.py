@@ -131,7 +131,11 @@ def work():
     scene = vrml.load(path)
     if action == "convert":          # what `mpeg4fba convert` does: read, then write
         vrml.dump(scene, sys.argv[5])
+    elif action == "info":           # what `mpeg4fba info` does: read, then sum up
+        json.dumps(scene_info(scene))
     return scene
+if action == "info":                 # imported before the baseline, like the parser
+    from mpeg4fba.cli.info import scene_info
 # Build the (lazily made) parser now, so the baseline holds it and the imports.
 vrml.loads("#VRML V2.0 utf8\nShape { geometry IndexedFaceSet { coord Coordinate "
            "{ point [ 0 0 0, 1 0 0, 0 1 0 ] } coordIndex [ 0, 1, 2, -1 ] } }")
@@ -404,6 +408,13 @@ def main(argv=None) -> int:
               f"target < 4x: {'met' if max(c_rss, c_tm) < 4 else 'MISSED'}", flush=True)
         res.other("  peak RSS increase, load + dump (convert)", info["bytes"],
                   f"{c_rss:.2f}x payload ({conv['rss_increase'] / MB:.0f} MB)", "< 4x", c_rss < 4)
+        inf = measure_memory(ifs_path, payload, "info")
+        i_rss, i_tm = inf["rss_increase"] / payload, inf["traced_peak"] / payload
+        print(f"{'  peak memory of load + summary (info)':<40} peak RSS +{inf['rss_increase'] / MB:.1f} MB "
+              f"= {i_rss:.2f}x, tracemalloc peak {inf['traced_peak'] / MB:.1f} MB = {i_tm:.2f}x   "
+              f"target < 4x: {'met' if max(i_rss, i_tm) < 4 else 'MISSED'}", flush=True)
+        res.other("  peak RSS increase, load + summary (info)", info["bytes"],
+                  f"{i_rss:.2f}x payload ({inf['rss_increase'] / MB:.0f} MB)", "< 4x", i_rss < 4)
 
         # 3. 4,096 Transforms
         tr_path = tmp / "transforms.wrl"
@@ -438,6 +449,20 @@ def main(argv=None) -> int:
                 secs, _ = best_of(lambda: try_loads(text), reps)
                 row.append(secs * 1e3)
             print(f"{n:>8,} {row[0]:>10.2f} {row[1]:>19.2f} {row[2]:>20.2f}", flush=True)
+
+        # 6. start-up (issue 20), a few fresh processes; bench_startup.py has more cases
+        from benchmarks.bench_startup import GOAL, best as best_process
+        print("\n# start-up, best of 3 fresh processes (wall time)")
+        bare = best_process([sys.executable, "-c", "pass"], 3, REPO)
+        for name, code in (("import mpeg4fba.vrml", ["-c", "import mpeg4fba.vrml"]),
+                           ("mpeg4fba --help", ["-m", "mpeg4fba", "--help"]),
+                           ("read a one-node file", ["-c", "import mpeg4fba.vrml as v; "
+                                                     "v.loads('#VRML V2.0 utf8\\nGroup {}')"])):
+            t = best_process([sys.executable] + code, 3, REPO)
+            goal = f"   goal < {GOAL} s: {'met' if t < GOAL else 'MISSED'}" if "read" not in name else ""
+            print(f"{name:<40} {t:6.3f} s ({t - bare:+.3f} s over bare Python {bare:.3f} s){goal}")
+            res.other(f"start-up: {name}", 0, f"{t:.3f} s", f"< {GOAL} s" if goal else "-",
+                      t < GOAL or not goal)
 
         if args.profile:  # inside the with: the generated files still exist
             if not to_profile:

@@ -254,3 +254,37 @@ def test_bare_ifs_reached_by_the_walk():
     scene.nodes[0].fields["children"] = [ifs]   # only a lenient read makes this
     (mesh,) = iter_meshes(scene)
     assert mesh.shape is None and mesh.geometry is ifs and len(mesh.path) == 1
+
+
+def _fan_by_hand(ci):
+    idx = [int(v) for v in ci] + ([-1] if len(ci) and ci[-1] != -1 else [])
+    tris, faces, face, cur = [], [], 0, []
+    for v in idx:
+        if v == -1:
+            tris += [[cur[0], cur[j], cur[j + 1]] for j in range(1, len(cur) - 1)]
+            faces += [face] * max(len(cur) - 2, 0)
+            face, cur = face + 1, []
+        else:
+            cur.append(v)
+    return np.array(tris, np.int64).reshape(-1, 3), np.array(faces, np.int64)
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_fan_triangulate_uniform_and_mixed_polygons_agree_with_a_plain_loop(seed):
+    # polygons all of one size take a reshape; mixed sizes the general path
+    rng = np.random.default_rng(seed)
+    for t in range(120):
+        n = int(rng.integers(0, 25))
+        if t % 2:
+            k = int(rng.integers(1, 7))
+            ci = np.c_[rng.integers(0, 50, (n, k)), -np.ones(n, int)].ravel()
+            if t % 4 == 1 and ci.size:
+                ci = ci[:-1]                         # the last -1 is optional
+        else:
+            ci = np.array(sum((list(rng.integers(0, 50, int(rng.integers(0, 7)))) + [-1]
+                               for _ in range(n)), []), np.int64)
+        ci = ci.astype(np.int32 if t % 3 else np.int64)
+        tris, faces = fan_triangulate(ci)
+        want_t, want_f = _fan_by_hand(ci)
+        assert tris.dtype == faces.dtype == np.int64
+        assert np.array_equal(tris, want_t) and np.array_equal(faces, want_f)

@@ -300,10 +300,24 @@ def fan_triangulate(coord_index: np.ndarray) -> tuple:
     >>> tris.tolist(), faces.tolist()
     ([[0, 1, 2], [0, 2, 3], [6, 7, 8]], [0, 0, 2])
     """
-    idx = np.asarray(coord_index, dtype=np.int64).reshape(-1)
+    idx = np.asarray(coord_index).reshape(-1)
     if idx.size and idx[-1] != -1:
         idx = np.append(idx, -1)
     ends = np.flatnonzero(idx == -1)
+    n = len(ends)
+    k = int(ends[0]) if n else 0
+    if n and len(idx) == n * (k + 1) and (idx[k::k + 1] == -1).all():
+        # every polygon has k vertices (all triangles, say): a reshape, no bookkeeping
+        # arrays per triangle, which on a big mesh cost more memory than the mesh
+        if k < 3:
+            return np.empty((0, 3), np.int64), np.empty(0, np.int64)
+        polys = idx.reshape(n, k + 1)
+        tris = np.empty((n, k - 2, 3), np.int64)
+        tris[:, :, 0] = polys[:, :1]
+        tris[:, :, 1] = polys[:, 1:k - 1]
+        tris[:, :, 2] = polys[:, 2:k]
+        return tris.reshape(-1, 3), np.repeat(np.arange(n, dtype=np.int64), k - 2)
+    idx = idx.astype(np.int64, copy=False)
     starts = np.concatenate(([0], ends[:-1] + 1)).astype(np.int64)
     per_poly = np.maximum(ends - starts - 2, 0)     # triangles of each polygon
     total = int(per_poly.sum())
@@ -370,7 +384,7 @@ def _mesh_error(ifs: Node, message: str, scene_path: Optional[str]) -> VRMLError
 
 
 def _triangulate(ifs: Node, n_points: int, scene_path: Optional[str]) -> tuple:
-    idx = np.asarray(ifs["coordIndex"], dtype=np.int64).reshape(-1)
+    idx = np.asarray(ifs["coordIndex"]).reshape(-1)     # as read (int32): no copy
     bad = np.flatnonzero((idx < -1) | (idx >= n_points))
     if bad.size:
         i = int(bad[0])

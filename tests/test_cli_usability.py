@@ -248,12 +248,12 @@ def test_write_errors_name_the_path_asked_for(tmp_path, monkeypatch):
     assert e.value.filename == str(tmp_path / "out.png")
 
     def refuse(*a, dir=None, **k):
-        raise PermissionError(13, "Permission denied", os.path.join(dir, ".tmp-abc123x.wrl"))
+        raise PermissionError(13, "Permission denied", os.path.join(dir, ".mpeg4fba-partial-1-abc-x.wrl"))
 
     monkeypatch.setattr(tempfile, "mkstemp", refuse)
     with pytest.raises(PermissionError) as e:
         atomic_write(tmp_path / "x.wrl", b"data")
-    assert e.value.filename == str(tmp_path / "x.wrl") and ".tmp-" not in str(e.value)
+    assert e.value.filename == str(tmp_path / "x.wrl") and ".mpeg4fba-partial-" not in str(e.value)
     assert [p.name for p in tmp_path.iterdir()] == ["out.png"]
 
 

@@ -308,7 +308,7 @@ def _doc(points='{"3.5": {"position": [1, 2, 3]}}', extra=""):
      'points[" 3.5"]: feature point 3.5 is also given as "3.5"'),
     (_doc('{"3.5": {"mesh": "Skin"}}'), 'points["3.5"]: a "mesh" without a "vertex"'),
     (_doc('{"3.5": {}}'), 'points["3.5"]: a point needs a "position", a "vertex" or both'),
-    (_doc('{"3.5": {"vertex": -1}}'), 'points["3.5"].vertex: expected an integer >= 0, not -1'),
+    (_doc('{"3.5": {"vertex": -1}}'), 'points["3.5"].vertex: expected an integer >= 0 (a vertex index, below 2**31), not -1'),
     (_doc('{"3.5": {"vertex": true}}'), 'points["3.5"].vertex: expected an integer >= 0'),
     (_doc('{"3.5": {"vertex": 2.5}}'), 'points["3.5"].vertex: expected an integer >= 0'),
     (_doc('{"3.5": {"vertex": 2, "mesh": 4}}'), 'points["3.5"].mesh: expected a string'),
@@ -339,7 +339,7 @@ def test_json_syntax_error_has_the_line(tmp_path):
         read_feature_points_json(path)
     e = info.value
     assert e.line == 4 and e.path == str(path) and "not valid JSON" in e.message
-    assert str(e).startswith(f"{path}:4: ")
+    assert str(e).startswith(f"{path}:4:3: ")   # line and column
 
 
 # -- FDP node in a scene --------------------------------------------------------------------

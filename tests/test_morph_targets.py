@@ -440,7 +440,7 @@ def test_mapping_file_errors(tmp_path):
     (tmp_path / "bad.json").write_text('{"a.obj": "open_jaw@10",\n "b.obj": }')
     with pytest.raises(FormatError) as e:
         read_mapping(tmp_path / "bad.json")
-    assert e.value.line == 2 and "bad JSON" in e.value.message
+    assert e.value.line == 2 and "not valid JSON" in e.value.message
     (tmp_path / "num.json").write_text('{"a.obj": 3}')
     with pytest.raises(FormatError, match="not a string"):
         read_mapping(tmp_path / "num.json")

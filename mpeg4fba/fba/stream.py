@@ -317,4 +317,7 @@ def _fields(arr, n: int, width: int, what: str) -> np.ndarray:
         raise ValueError(f"{what} must be an array [{n}, {width}], not {arr.shape}")
     if not np.array_equal(arr, np.round(arr)):
         raise ValueError(f"{what} fields are integers")
+    if arr.size and np.abs(arr).max() >= 2 ** 31:
+        raise ValueError(f"{what} fields are small integers; {arr.flat[np.argmax(np.abs(arr))]} "
+                         "does not fit their 32 bits")
     return arr.astype(np.int32)

@@ -517,11 +517,15 @@ def _scatter(vals: np.ndarray, off: np.ndarray, mask: np.ndarray, data: bytes, t
         at = first[rows][:, None] + np.arange(out.shape[1])
         fields = vals[at]
         bad = fields != np.round(fields)
-        if bad.any():
-            r, k = np.argwhere(bad)[0]
+        # held as 32-bit integers: a larger one would wrap (1e12 -> -727379968)
+        huge = ~bad & (np.abs(fields) >= 2 ** 31)
+        if bad.any() or huge.any():
+            r, k = np.argwhere(bad | huge)[0]
             line = value_lines[rows[r]]
             where = int(tok[first_tok[line] + at[r, k] - off[rows[r]]])
-            problems.add(line + 1, f"{label} field '{_token_at(data, where)}' is not an integer")
+            problems.add(line + 1, f"{label} field '{_token_at(data, where)}' is " +
+                         ("beyond 32 bits (the fields are small integers)" if huge[r, k]
+                          else "not an integer"))
             continue
         out[rows] = fields
     return values, visemes, expressions

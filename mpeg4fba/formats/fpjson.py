@@ -68,6 +68,7 @@ from ..fba.fapu import FAPU
 from ..fba.featurepoints import FeaturePointError, FeaturePointSet, normalise_id, point_order
 from .._atomic import atomic_write
 from .errors import FormatError
+from .jsontext import loads_json, shown as _shown
 
 __all__ = ["FORMAT_NAME", "FORMAT_VERSION", "read_feature_points_json",
            "loads_feature_points_json", "write_feature_points_json",
@@ -173,12 +174,7 @@ def read_confidences(path: PathLike) -> dict:
 
 def _parse(text: Union[str, bytes], path: Optional[str]) -> tuple:
     """(points, FAPU or None, {id: confidence}) of a checked document."""
-    try:
-        doc = json.loads(text, object_pairs_hook=_Object)
-    except json.JSONDecodeError as e:
-        raise FormatError(f"not valid JSON: {e.msg} (column {e.colno})", path, e.lineno) from None
-    except UnicodeDecodeError as e:
-        raise FormatError(f"not UTF-8 text: {e.reason} at byte {e.start}", path) from None
+    doc = loads_json(text, path, object_pairs_hook=_Object)
     check = _Checker(path)
     check.object(doc, "", _TOP_KEYS, "the document")
     for key in ("format", "version", "points"):
@@ -221,9 +217,10 @@ def _parse(text: Union[str, bytes], path: Optional[str]) -> tuple:
             positions[fp] = [float(x) for x in p]
         if "vertex" in point:
             v = point["vertex"]
-            if not (isinstance(v, int) and not isinstance(v, bool) and v >= 0):
+            if not (isinstance(v, int) and not isinstance(v, bool) and 0 <= v < 2 ** 31):
                 raise check.error(_join(where, "vertex"),
-                                  f"expected an integer >= 0, not {json.dumps(v)}")
+                                  f"expected an integer >= 0 (a vertex index, below 2**31), "
+                                  f"not {_shown(v)}")
             mesh = point.get("mesh")
             if mesh is not None and not isinstance(mesh, str):
                 raise check.error(_join(where, "mesh"),

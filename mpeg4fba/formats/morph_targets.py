@@ -46,7 +46,6 @@ Example
 from __future__ import annotations
 
 import base64
-import json
 import os
 import re
 import stat
@@ -60,6 +59,7 @@ from ..fba.face import FaceMesh, FaceModel, FaceTransform
 from ..fba.morph import FULL_SHAPE, MorphTarget, fat_from_morph_targets
 from ..vrml.walk import fan_triangulate
 from .errors import FormatError
+from .jsontext import loads_json, shown as _json_shown
 
 __all__ = ["read_morph_targets", "read_morph_face", "read_obj", "parse_obj", "read_mapping",
            "target_stem", "FORMATS"]
@@ -150,13 +150,19 @@ def parse_obj(text: str, path: Optional[str] = None) -> list:
         raise FormatError("no vertices ('v' lines) in the OBJ file", path)
     triples = _XYZ.findall("\n".join(vbodies))
     if len(triples) != len(vbodies):
-        bad = next(i for i, b in zip(where["v"], vbodies) if len(b.split()) < 3)
-        raise _obj_error(text, path, int(bad), "a 'v' line needs x, y and z")
+        bad = next((i for i, b in zip(where["v"], vbodies) if not _XYZ.match(b)), where["v"][0])
+        raise _obj_error(text, path, int(bad), f"'v' line {records[bad][1].strip()!r}: needs "
+                         "x, y and z separated by spaces or tabs")
     try:
         vertices = np.array(triples, dtype=np.float64)
     except ValueError:
-        bad = next(i for i, t in zip(where["v"], triples) if not _floats(t))
+        bad = next((i for i, t in zip(where["v"], triples) if not _floats(t)), where["v"][0])
         raise _obj_error(text, path, int(bad), f"'v {records[bad][1].strip()}': not numbers") from None
+    finite = np.isfinite(vertices).all(axis=1)
+    if not finite.all():
+        bad = where["v"][int(np.argmin(finite))]
+        raise _obj_error(text, path, int(bad), f"'v {records[bad][1].strip()}': coordinates "
+                         "must be finite numbers (not nan, inf or beyond 1.8e308)")
     n = len(vertices)
     faces = where["f"]
     groups = np.sort(np.concatenate([where["o"], where["g"]]))
@@ -166,14 +172,19 @@ def parse_obj(text: str, path: Optional[str] = None) -> list:
     tokens = _SLASHES.sub("", " 0 ".join(fbodies)).split()
     try:
         idx = np.array(tokens, dtype=np.int64)
-    except ValueError:
-        bad = next(i for i, b in zip(faces, fbodies) if not _ints(_SLASHES.sub("", b).split()))
+    except (ValueError, OverflowError):
+        bad = next((i for i, b in zip(faces, fbodies) if not _ints(_SLASHES.sub("", b).split())),
+                   faces[0])
         raise _obj_error(text, path, int(bad), f"'f {records[bad][1].strip()}': vertex "
-                                               f"indices must be whole numbers") from None
+                                               f"indices must be whole numbers within "
+                                               f"+-{_INDEX_MAX:,}") from None
     sep = idx == 0
     if sep.sum() != len(faces) - 1:
-        bad = next(i for i, b in zip(faces, fbodies) if "0" in _SLASHES.sub("", b).split())
-        raise _obj_error(text, path, int(bad), "vertex index 0 (OBJ counts from 1)")
+        # "0", "00", "+0", "-0": all zero, and OBJ counts from 1
+        bad = next((i for i, b in zip(faces, fbodies)
+                    if 0 in map(int, _SLASHES.sub("", b).split())), faces[0])
+        raise _obj_error(text, path, int(bad), f"'f {records[bad][1].strip()}': vertex index 0 "
+                         "(OBJ counts from 1; negative indices count back from the last 'v')")
     poly = np.cumsum(sep)                                   # the f line of each token
     before = np.cumsum(kinds == "v")[faces]                 # vertices defined before each f
     resolved = np.where(idx > 0, idx - 1, before[poly] + idx)
@@ -210,10 +221,13 @@ def _floats(items) -> bool:
         return False
 
 
+_INDEX_MAX = 2 ** 62      # no mesh comes near; beyond it an index is garbage, not a vertex
+
+
 def _ints(items) -> bool:
+    """Whether every item is a whole number within +-_INDEX_MAX."""
     try:
-        [int(x) for x in items]
-        return True
+        return all(-_INDEX_MAX <= int(x) <= _INDEX_MAX for x in items)
     except ValueError:
         return False
 
@@ -371,6 +385,7 @@ class _Gltf:
         self.path = str(path)
         with open(self.path, "rb") as f:      # a missing or unreadable file is an OSError
             raw = f.read()
+        self.size = len(raw)
         try:
             # parsed from bytes, GLB or JSON by the magic, so pygltflib touches no file
             if raw[:4] == b"glTF":
@@ -391,12 +406,24 @@ class _Gltf:
     def error(self, message: str) -> FormatError:
         return FormatError(message, self.path)
 
-    def buffer(self, i: int) -> bytes:
+    def whole(self, value, where: str, low: int = 0) -> int:
+        """``value`` checked to be a whole number >= ``low``; ``where`` is its JSON path
+        (``accessors[3].count``) for the error."""
+        if not isinstance(value, int) or isinstance(value, bool) or value < low:
+            raise self.error(f"{where} is {_json_shown(value, 40)}, not a whole number "
+                             f">= {low}")
+        return value
+
+    def item(self, array, index, where: str, what: str):
+        """``array[index]`` of a top-level glTF array, ``index`` checked."""
+        index = self.whole(index, where)
+        if not isinstance(array, list) or index >= len(array):
+            raise self.error(f"{where}: {what}[{index}] does not exist")
+        return array[index]
+
+    def buffer(self, i: int, where: str) -> bytes:
         if i not in self._buffers:
-            try:
-                b = self.doc.buffers[i]
-            except (IndexError, TypeError):
-                raise self.error(f"buffers[{i}] does not exist") from None
+            b = self.item(self.doc.buffers, i, where, "buffers")
             length = b.byteLength
             if not isinstance(length, int) or isinstance(length, bool) or length < 0:
                 raise self.error(f"buffers[{i}].byteLength is {length!r}, not a whole number "
@@ -427,37 +454,51 @@ class _Gltf:
         except ValueError:
             raise self.error(f"buffers[{i}].uri: bad base64 data in the data: URI") from None
 
-    def _view(self, view: int, offset: int, dtype: np.dtype, count: int, width: int,
-              what: str) -> np.ndarray:
-        try:
-            bv = self.doc.bufferViews[view]
-        except (IndexError, TypeError):
-            raise self.error(f"{what}: bufferView {view} does not exist") from None
-        data = self.buffer(bv.buffer)
+    def _view(self, view, offset, dtype: np.dtype, count: int, width: int,
+              where: str) -> np.ndarray:
+        """``count`` elements of ``width`` x ``dtype`` from a bufferView; ``where`` is the
+        JSON path of what asks (``accessors[2]``), for errors."""
+        view = self.whole(view, f"{where}.bufferView")
+        bv = self.item(self.doc.bufferViews, view, f"{where}.bufferView", "bufferViews")
+        vp = f"bufferViews[{view}]"
+        buffer = self.whole(bv.buffer, f"{vp}.buffer")
+        data = self.buffer(buffer, f"{vp}.buffer")
         item = dtype.itemsize * width
-        stride = bv.byteStride or item
-        start = (bv.byteOffset or 0) + (offset or 0)
-        end = (bv.byteOffset or 0) + bv.byteLength
-        if count and (start + stride * (count - 1) + item > min(end, len(data))):
-            raise self.error(f"{what}: {count} elements do not fit in bufferView {view}")
+        stride = item if bv.byteStride is None else self.whole(bv.byteStride, f"{vp}.byteStride",
+                                                               low=item)
+        start = self.whole(bv.byteOffset or 0, f"{vp}.byteOffset") + \
+            self.whole(offset or 0, f"{where}.byteOffset")
+        end = self.whole(bv.byteOffset or 0, f"{vp}.byteOffset") + \
+            self.whole(bv.byteLength, f"{vp}.byteLength")
+        if end > len(data):
+            raise self.error(f"{vp} ends at byte {end}, past the {len(data)} bytes of "
+                             f"buffers[{buffer}]")
+        if count and start + stride * (count - 1) + item > end:
+            raise self.error(f"{where}: {count} elements of {item} bytes do not fit in {vp} "
+                             f"({end - min(start, end)} bytes from the element start)")
         arr = np.ndarray((count, width), dtype=dtype, buffer=data, offset=start,
                          strides=(stride, dtype.itemsize))
         return arr.copy()
 
-    def accessor(self, index: int, what: str) -> np.ndarray:
+    def accessor(self, index, what: str) -> np.ndarray:
         """Accessor ``index`` as a float array [count, width], sparse and normalised
-        values resolved."""
-        try:
-            acc = self.doc.accessors[index]
-        except (IndexError, TypeError):
-            raise self.error(f"{what}: accessor {index} does not exist") from None
+        values resolved.  ``what`` (the JSON path of what refers to it) names it in
+        errors, beside its own path."""
+        acc = self.item(self.doc.accessors, index, what, "accessors")
+        ap = f"accessors[{index}]"
         if acc.componentType not in _COMPONENTS or acc.type not in _WIDTH:
-            raise self.error(f"{what}: unsupported accessor {acc.componentType} {acc.type}")
+            raise self.error(f"{ap} (for {what}): unsupported accessor "
+                             f"{_json_shown(acc.componentType, 20)} {_json_shown(acc.type, 20)}")
         dtype, width = np.dtype(_COMPONENTS[acc.componentType]), _WIDTH[acc.type]
+        count = self.whole(acc.count, f"{ap}.count")
         if acc.bufferView is None:
-            out = np.zeros((acc.count, width))
+            # all zeros until sparse values: bounded by the file, not by the count it states
+            if count * width > 64 * self.size + 4096:
+                raise self.error(f"{ap}.count is {count}: an accessor without a bufferView "
+                                 f"that large does not fit a {self.size}-byte file")
+            out = np.zeros((count, width))
         else:
-            out = self._view(acc.bufferView, acc.byteOffset, dtype, acc.count, width, what)
+            out = self._view(acc.bufferView, acc.byteOffset, dtype, count, width, ap)
             out = out.astype(np.float64)
         if acc.normalized and dtype.kind in "iu":
             out = out / np.iinfo(dtype).max
@@ -465,18 +506,26 @@ class _Gltf:
                 out = np.maximum(out, -1.0)
         if acc.sparse is not None and acc.sparse.count:
             s = acc.sparse
+            sp = f"{ap}.sparse"
+            n = self.whole(s.count, f"{sp}.count")
+            if s.indices is None or s.values is None:
+                raise self.error(f"{sp}: needs both indices and values")
             if s.indices.componentType not in (5121, 5123, 5125):
-                raise self.error(f"{what}: sparse indices of type {s.indices.componentType}")
+                raise self.error(f"{sp}.indices.componentType is "
+                                 f"{_json_shown(s.indices.componentType, 20)}, not 5121, 5123 or 5125")
             idx = self._view(s.indices.bufferView, s.indices.byteOffset,
-                             np.dtype(_COMPONENTS[s.indices.componentType]), s.count, 1,
-                             what)[:, 0].astype(np.int64)
-            vals = self._view(s.values.bufferView, s.values.byteOffset, dtype, s.count, width,
-                              what).astype(np.float64)
+                             np.dtype(_COMPONENTS[s.indices.componentType]), n, 1,
+                             f"{sp}.indices")[:, 0].astype(np.int64)
+            vals = self._view(s.values.bufferView, s.values.byteOffset, dtype, n, width,
+                              f"{sp}.values").astype(np.float64)
             if acc.normalized and dtype.kind in "iu":
                 vals = vals / np.iinfo(dtype).max
-            if len(idx) and (idx.min() < 0 or idx.max() >= acc.count):
-                raise self.error(f"{what}: sparse index out of range")
+            if len(idx) and (idx.min() < 0 or idx.max() >= count):
+                raise self.error(f"{sp}.indices: index {int(idx.max())} out of range "
+                                 f"({count} elements)")
             out[idx] = vals
+        if not np.isfinite(out).all():
+            raise self.error(f"{ap} (for {what}): values must be finite (not nan or inf)")
         return out
 
     def positions(self, attributes, what: str) -> Optional[np.ndarray]:
@@ -484,9 +533,9 @@ class _Gltf:
             getattr(attributes, "POSITION", None)
         if index is None:
             return None
-        v = self.accessor(index, what)
+        v = self.accessor(index, f"{what}.POSITION")
         if v.shape[1] != 3:
-            raise self.error(f"{what}: POSITION is not VEC3")
+            raise self.error(f"{what}.POSITION: accessors[{index}] is not VEC3")
         return v
 
 
@@ -494,9 +543,10 @@ def _gltf_triangles(g: _Gltf, prim, n: int, what: str) -> np.ndarray:
     if prim.indices is None:
         idx = np.arange(n, dtype=np.int64)
     else:
-        idx = g.accessor(prim.indices, what)[:, 0].astype(np.int64)
+        idx = g.accessor(prim.indices, f"{what}.indices")[:, 0].astype(np.int64)
     if len(idx) and (idx.min() < 0 or idx.max() >= n):
-        raise g.error(f"{what}: vertex index out of range ({n} vertices)")
+        raise g.error(f"{what}.indices: vertex index {int(idx.max())} out of range ({n} "
+                      "vertices)")
     mode = 4 if prim.mode is None else prim.mode
     if mode == 4:
         return idx[: len(idx) // 3 * 3].reshape(-1, 3)
@@ -558,6 +608,19 @@ def _target_names(mesh, n: int) -> list:
 
 def _gltf_shapes(path: PathLike, with_targets: bool) -> _Shapes:
     g = _Gltf(path)
+    try:
+        return _gltf_shapes_of(g, with_targets)
+    except (TypeError, ValueError, KeyError, IndexError, AttributeError, OverflowError,
+            ZeroDivisionError) as e:
+        if isinstance(e, FormatError):
+            raise
+        # pygltflib keeps whatever type the JSON had; a member of a type the checks
+        # above did not foresee ends here, still as this file's error
+        raise g.error(f"a member of the glTF document has a value of the wrong type or "
+                      f"range ({type(e).__name__}: {_json_shown(str(e), 120)})") from None
+
+
+def _gltf_shapes_of(g: _Gltf, with_targets: bool) -> _Shapes:
     doc = g.doc
     shapes = _Shapes()
     taken: set = set()
@@ -593,8 +656,8 @@ def _gltf_shapes(path: PathLike, with_targets: bool) -> _Shapes:
             dup = next(x for x in names if names.count(x) > 1)
             raise g.error(f"mesh {base}: two morph targets named {dup!r}")
         for pk, prim in enumerate(prims):
-            what = f"mesh {base} primitive {pk}"
-            v = g.positions(prim.attributes, what)
+            what = f"meshes[{mi}].primitives[{pk}]"
+            v = g.positions(prim.attributes, f"{what}.attributes")
             if v is None:
                 continue
             name = _unique(base if len(prims) == 1 else f"{base}_{pk}", taken)
@@ -603,12 +666,12 @@ def _gltf_shapes(path: PathLike, with_targets: bool) -> _Shapes:
             if not with_targets:
                 continue
             for k, t in enumerate(prim.targets or []):
-                d = g.positions(t, f"{what} morph target {names[k]!r}")
+                d = g.positions(t, f"{what}.targets[{k}]")
                 if d is None:
                     continue
                 if d.shape != v.shape:
-                    raise g.error(f"{what} morph target {names[k]!r}: {len(d)} positions, "
-                                  f"the mesh {len(v)}")
+                    raise g.error(f"{what}.targets[{k}] (morph target {names[k]!r}): "
+                                  f"{len(d)} positions, the mesh {len(v)}")
                 shapes.targets.setdefault(names[k], {})[name] = v + d
     if not shapes.meshes:
         raise g.error("no mesh primitive with POSITION in the glTF file")
@@ -644,10 +707,10 @@ def read_mapping(mapping: Union[None, Mapping, PathLike]) -> dict:
     with open(path, encoding="utf-8") as f:
         text = f.read()
     if text.lstrip().startswith("{"):
-        try:
-            data = json.loads(text)
-        except json.JSONDecodeError as e:
-            raise FormatError(f"bad JSON: {e.msg}", path, e.lineno, e.colno) from None
+        data = loads_json(text, path)
+        if not isinstance(data, dict):
+            raise FormatError("a JSON mapping is one object of file or target name -> what "
+                              "it shows", path)
         bad = [k for k, v in data.items() if not isinstance(v, str)]
         if bad:
             raise FormatError(f"mapping of {bad[0]!r} is not a string (give e.g. "
@@ -794,7 +857,15 @@ def read_morph_face(neutral_path: PathLike, target_paths: Sequence[PathLike] = (
     base = {m: v for m, (v, _) in neutral.meshes.items()}
     # targets rebuilt from a FAT's intervals are in the neutral's order by construction
     # (and may move a small part far: no vertex-order guess)
-    fat = fat_from_morph_targets(base, targets, tol=tol, **({"order_check": None} if ours else {}))
-    meshes = [FaceMesh(m, v, t, neutral.parents.get(m)) for m, (v, t) in neutral.meshes.items()]
-    return FaceModel(meshes, neutral.transforms, fat=fat,
-                     name=name or target_stem(neutral_path))
+    try:
+        fat = fat_from_morph_targets(base, targets, tol=tol,
+                                     **({"order_check": None} if ours else {}))
+        meshes = [FaceMesh(m, v, t, neutral.parents.get(m))
+                  for m, (v, t) in neutral.meshes.items()]
+        return FaceModel(meshes, neutral.transforms, fat=fat,
+                         name=name or target_stem(neutral_path))
+    except ValueError as e:
+        if isinstance(e, FormatError):
+            raise
+        # the targets' names say which file each came from
+        raise FormatError(str(e), str(neutral_path)) from None

@@ -236,16 +236,25 @@ class _Doc:
         except ValueError:
             value = math.nan
         if not math.isfinite(value):
-            raise self.error(f"<{elem.tag}> attribute {name}: {text!r} is not a number", elem)
+            raise self.error(f"<{elem.tag}> attribute {name}: {_cut(text)!r} is not a number", elem)
         return value
 
     def integer(self, elem: ET.Element, name: str) -> int:
+        """A whole-number attribute: a vertex index or a FAP number, so within 32 bits."""
         text = self.attr(elem, name)
         try:
-            return int(text.strip())
+            value = int(text.strip())
         except ValueError:
-            raise self.error(f"<{elem.tag}> attribute {name}: {text!r} is not an integer",
-                             elem) from None
+            raise self.error(f"<{elem.tag}> attribute {name}: {_cut(text)!r} is not an "
+                             "integer", elem) from None
+        if not -2 ** 31 <= value < 2 ** 31:
+            raise self.error(f"<{elem.tag}> attribute {name}: {_cut(text)} is beyond 32 bits; "
+                             "no vertex index or FAP number is", elem)
+        return value
+
+
+def _cut(text: str, limit: int = 40) -> str:
+    return text if len(text) <= limit else text[:limit] + "..."
 
 
 def _parse_xml(data: Union[bytes, str], path: Optional[str]) -> _Doc:
@@ -273,6 +282,13 @@ def _parse_xml(data: Union[bytes, str], path: Optional[str]) -> _Doc:
     except expat.ExpatError as e:
         raise FormatError(f"not well-formed XML: {expat.errors.messages[e.code]}", path,
                           e.lineno, e.offset + 1) from None
+    except (LookupError, ValueError) as e:
+        if isinstance(e, FormatError):
+            raise
+        # the XML declaration names an encoding Python does not know, or one expat
+        # can't take (multi-byte, or not a text encoding at all)
+        raise FormatError(f"the XML declaration's encoding can't be read ({e}); an Xface "
+                          ".fdp is UTF-8", path, 1) from None
     return _Doc(builder.close(), lines, path)
 
 
@@ -359,10 +375,13 @@ def _read_item(doc: _Doc, elem: ET.Element, key: str) -> XfaceFdpItem:
             values = []
             for token in (sub.text or "").split():
                 try:
-                    values.append(int(token))
+                    value = int(token)
                 except ValueError:
-                    raise doc.error(f"<indices> of fdp {key}: {token!r} is not a vertex "
-                                    "index", sub) from None
+                    value = None
+                if value is None or not -2 ** 31 <= value < 2 ** 31:
+                    raise doc.error(f"<indices> of fdp {key}: {_cut(token)!r} is not a vertex "
+                                    "index", sub)
+                values.append(value)
             values = np.array(values, dtype=np.int64)
             if (values < 0).any():
                 raise doc.error(f"<indices> of fdp {key}: {int(values[values < 0][0])} is "

@@ -1,0 +1,1 @@
+"""Fuzzing of the file readers (issue 21): see harness.py."""

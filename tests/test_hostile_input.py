@@ -11,6 +11,7 @@ import os
 import struct
 import subprocess
 import sys
+from pathlib import Path
 
 import pytest
 
@@ -188,7 +189,6 @@ def test_gltf_seed_itself_reads(tmp_path):
 
 @pytest.mark.parametrize("value", ["1000000000000", "-2147483649", "2147483648"])
 def test_fap_viseme_and_expression_values_never_wrap(value):
-    from pathlib import Path
     text = (Path(__file__).resolve().parents[1] / "spec_fixtures" / "fap" /
             "viseme_expression.fap").read_text()
     bad = text.replace("0 1 10 40 0 3 50", f"0 1 10 40 0 {value} 50", 1)
@@ -224,3 +224,38 @@ def test_atomic_writes_reach_the_disk_before_the_rename(tmp_path, monkeypatch):
     atomic_write(tmp_path / "a.txt", "x")
     assert order == ["fsync", "replace"]
 
+
+
+# -- a face that loads is a face that plays --------------------------------------------------------
+
+FIXTURES = Path(__file__).resolve().parents[1] / "spec_fixtures" / "validate"
+
+
+@pytest.mark.parametrize("code", ["FBA004", "FBA005", "FBA006", "FBA007", "FBA008", "FBA009",
+                                  "FBA010"])
+def test_load_face_refuses_a_fat_that_can_not_play(code):
+    from mpeg4fba.formats.validate import validate
+    from mpeg4fba.formats.wrl_face import load_face
+    path = next(FIXTURES.glob(f"{code}_*.wrl"))
+    assert code in {f.code for f in validate(path).findings}   # validate lists them all
+    if code in ("FBA006", "FBA010"):      # a table aimed at the wrong node: never a model
+        e = _refused(lambda: load_face(path, check=False), "faceSceneGraphNode",
+                     error=FormatError)
+    else:
+        e = _refused(lambda: load_face(path), code, error=FormatError)
+        face = load_face(path, check=False)          # still there for tools that repair
+        assert face.fat is not None
+    assert e.path == str(path) and e.line is not None
+
+
+def test_play_of_a_face_with_fapid_70_is_a_clear_error(tmp_path):
+    from click.testing import CliRunner
+    from mpeg4fba.cli import main
+    from mpeg4fba.fba.stream import FapStream
+    from mpeg4fba.formats.fap import write_fap
+    stream = tmp_path / "s.fap"
+    write_fap(FapStream.from_values({"open_jaw": [0, 100]}, fps=25), stream)
+    face = next(FIXTURES.glob("FBA004_*.wrl"))
+    r = CliRunner().invoke(main, ["play", str(face), str(stream), "-o", str(tmp_path / "o.glb")])
+    assert r.exit_code != 0 and "FBA004" in r.output and "Traceback" not in r.output
+    assert not (tmp_path / "o.glb").exists()

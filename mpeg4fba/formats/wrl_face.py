@@ -514,20 +514,36 @@ def face_from_scene(scene: Scene, path: Optional[str] = None, face: Optional[str
     return model
 
 
+# Validator rules (see ``mpeg4fba validate``) whose breach makes a face unplayable: a
+# FAP table that can't be evaluated or indexes past its mesh.
+UNPLAYABLE = ("FBA004", "FBA005", "FBA006", "FBA007", "FBA008", "FBA009", "FBA010")
+
+
 def load_face(path: PathLike, strict: bool = True, *, max_inflated: Optional[int] = None,
-              max_ratio: Optional[float] = None) -> FaceModel:
+              max_ratio: Optional[float] = None, check: bool = True) -> FaceModel:
     """Read a VRML face file (plain or gzipped) into a :class:`FaceModel`.
 
     ``strict=False`` reads the VRML leniently (unknown nodes and fields kept, with a
     warning; see :func:`mpeg4fba.vrml.load`).  ``max_inflated`` / ``max_ratio`` bound
     how far gzip data may inflate (see :func:`mpeg4fba.vrml.load`).  Raises VRMLError
     for VRML that can't be read and FormatError for a scene that is not a face (see
-    :func:`face_from_scene`).
+    :func:`face_from_scene`).  A face that loads is a face that plays: with ``check``
+    (the default) a FAT that breaks one of the validator's rules in ``UNPLAYABLE``
+    (fapID outside 1-68, interval borders without a 0, a vertex index past its mesh, a
+    displacement count that does not match, ...) is a FormatError at the table's line;
+    ``mpeg4fba validate`` lists every problem at once.
     """
     from ..vrml import load
     p = os.fspath(path)
-    return face_from_scene(load(p, strict=strict, max_inflated=max_inflated,
+    face = face_from_scene(load(p, strict=strict, max_inflated=max_inflated,
                                 max_ratio=max_ratio), p)
+    if check:
+        from ..fba.compliance import check_fat
+        for f in check_fat(face):
+            if f.code in UNPLAYABLE:
+                raise FormatError(f"{f.message} ({f.code}; `mpeg4fba validate` lists every "
+                                  "problem of the face)", f.path or p, f.line, f.column)
+    return face
 
 
 # -- writing --------------------------------------------------------------------------------

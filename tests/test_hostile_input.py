@@ -259,3 +259,44 @@ def test_play_of_a_face_with_fapid_70_is_a_clear_error(tmp_path):
     r = CliRunner().invoke(main, ["play", str(face), str(stream), "-o", str(tmp_path / "o.glb")])
     assert r.exit_code != 0 and "FBA004" in r.output and "Traceback" not in r.output
     assert not (tmp_path / "o.glb").exists()
+
+
+# -- work bounded by the input, not by numbers inside it ---------------------------------------------
+
+def _cli(*args):
+    from click.testing import CliRunner
+    from mpeg4fba.cli import main
+    with alarm(120, "the command"):
+        return CliRunner().invoke(main, [str(a) for a in args])
+
+
+def test_render_size_is_bounded_before_any_pixel(tmp_path):
+    r = _cli("render", "--example", "--size", "100000x100000", "-o", tmp_path / "x.png")
+    assert r.exit_code == 2 and "8192" in r.output and not (tmp_path / "x.png").exists()
+
+
+@pytest.mark.parametrize("value", ["1e300", "nan", "-inf", "5000"])
+def test_render_fap_values_out_of_range_are_an_error(tmp_path, value):
+    r = _cli("render", "--example", "--fap", f"open_jaw={value}", "--size", "60x70",
+             "-o", tmp_path / "x.png")
+    assert r.exit_code == 2 and "0 to 4320" in r.output
+    assert "overflow" not in r.output and not (tmp_path / "x.png").exists()
+
+
+def test_resample_of_a_tiny_fps_is_refused_up_front():
+    from mpeg4fba.fba.stream import MAX_FRAMES, FapStream
+    s = FapStream.from_values({"open_jaw": [0, 100, 200]}, fps=1e-5)
+    with alarm(10, "resample"), pytest.raises(ValueError, match=f"{MAX_FRAMES:,}"):
+        s.resample(25)
+    assert len(FapStream.from_values({"open_jaw": [0, 100, 200]}, fps=25).resample(50)) == 6
+
+
+def test_play_to_wrl_of_a_very_long_stream_is_refused_up_front(tmp_path):
+    import numpy as np
+    from mpeg4fba.fba.stream import FapStream
+    from mpeg4fba.formats.fap import write_fap
+    write_fap(FapStream.from_values({"open_jaw": (np.arange(40_000) % 200).tolist()}),
+              tmp_path / "long.fap")
+    r = _cli("play", "--example", tmp_path / "long.fap", "-o", tmp_path / "o.wrl")
+    assert r.exit_code == 1 and "40,000 frames" in r.output and ".glb" in r.output
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["long.fap"]

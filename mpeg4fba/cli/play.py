@@ -67,14 +67,21 @@ def load_stream_arg(path: Optional[str], demo: bool):
     return read_fap(path)
 
 
+MAX_SIDE = 8192
+
+
 def parse_size(size: str) -> tuple:
     """(width, height) from a ``--size`` value such as ``480x560``."""
     try:
         w, h = (int(v) for v in size.lower().split("x"))
-        return w, h
     except ValueError:
         raise click.BadParameter(f"{size!r}: expected WIDTHxHEIGHT, e.g. 480x560",
                                  param_hint="--size") from None
+    if not (1 <= w <= MAX_SIDE and 1 <= h <= MAX_SIDE):
+        # refused before any pixel is allocated: 100000x100000 would be 40 GB
+        raise click.BadParameter(f"{size!r}: each side from 1 to {MAX_SIDE} pixels",
+                                 param_hint="--size")
+    return w, h
 
 
 def _frames(spec: Optional[str], n: int) -> range:

@@ -33,6 +33,9 @@ from .play import load_face_arg, parse_size
 __all__ = ["render"]
 
 
+_NO_RANGE = 1e5   # for a FAP whose range the table lacks: far past any face's motion
+
+
 def _pose(faps: tuple, viseme: Optional[int], expression: Optional[int]) -> dict:
     from ..fba.tables import FAP
 
@@ -47,10 +50,16 @@ def _pose(faps: tuple, viseme: Optional[int], expression: Optional[int]) -> dict
         except KeyError as e:  # its message names the nearest FAPs
             raise click.BadParameter(f"{item!r}: {e.args[0]}", param_hint="--fap") from None
         try:
-            values[number] = float(value)
+            v = float(value)
         except ValueError:
             raise click.BadParameter(f"{item!r}: {value.strip()!r} is not a number",
                                      param_hint="--fap") from None
+        lo, hi = FAP[number].range or (-_NO_RANGE, _NO_RANGE)
+        if not lo <= v <= hi:     # also nan and inf; 1e300 would overflow the geometry
+            raise click.BadParameter(
+                f"{item!r}: {FAP[number].name} takes {lo:g} to {hi:g} (in its FAPU)",
+                param_hint="--fap")
+        values[number] = v
     pose = {"faps": values}
     if viseme is not None:
         pose["visemes"] = (viseme, 0, 63, 0)

@@ -37,6 +37,8 @@ __all__ = ["FapFrame", "FapStream", "FapRangeWarning", "VISEME_FIELDS", "EXPRESS
 VISEME_FIELDS = ("viseme_select1", "viseme_select2", "viseme_blend", "viseme_def")
 EXPRESSION_FIELDS = ("expression_select1", "expression_intensity1", "expression_select2",
                      "expression_intensity2", "init_face", "expression_def")
+MAX_FRAMES = 1_000_000    # 11 hours at 25 fps; its values alone take 0.5 GB
+
 # Bounds of each high-level field (selects: viseme 0-14, expression 0-6; blend and
 # intensities 0-63; the flags 0-1).
 _VISEME_MAX = np.array([14, 14, 63, 1])
@@ -246,8 +248,12 @@ class FapStream:
         n = len(self)
         if n == 0:
             return FapStream.empty(fps)
-        values, given, vis, exp = self.held()
         m = max(1, int(np.floor(n * fps / self.fps + 1e-9)))
+        if m > MAX_FRAMES:
+            # refused before the arrays: a stream read at fps=1e-5 would ask for billions
+            raise ValueError(f"resampling {n} frames at {self.fps:g} fps to {fps:g} fps makes "
+                             f"{m:,} frames, more than {MAX_FRAMES:,}")
+        values, given, vis, exp = self.held()
         t = np.arange(m) * (self.fps / fps)              # new times, in old frame units
         lo = np.minimum(np.floor(t + 1e-9).astype(int), n - 1)
         hi = np.minimum(lo + 1, n - 1)

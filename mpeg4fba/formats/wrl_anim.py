@@ -99,6 +99,9 @@ def _face_nodes(face: FaceModel, scene: Scene) -> tuple:
     return out[0], out[1]
 
 
+MAX_NUMBERS = 1 << 27     # vertex coordinates over all frames: ~1 GB held as float64
+
+
 def animated_scene(face: FaceModel, stream: FapStream, *, protos: bool = True) -> Scene:
     """The VRML97 scene of ``face`` playing ``stream`` in a loop (see the module doc).
 
@@ -108,6 +111,13 @@ def animated_scene(face: FaceModel, stream: FapStream, *, protos: bool = True) -
     n = len(stream)
     if n == 0:
         raise ValueError("the FAP stream has no frames: nothing to animate")
+    vertices = sum(len(m.vertices) for m in face.meshes.values())
+    if n * vertices * 3 > MAX_NUMBERS:
+        # refused before the work: every frame's vertices are held, then written out
+        raise ValueError(f"{n:,} frames x {vertices:,} vertices is {n * vertices * 3:,} "
+                         f"numbers, more than the {MAX_NUMBERS:,} a VRML animation is "
+                         "written with here; play a part of the stream (stream[a:b]) or write "
+                         ".glb, which keeps morph-target weights per frame, not vertices")
     scene = scene_from_face(face, protos=protos)
     ifs, transforms = _face_nodes(face, scene)
     taken = set(scene.defs)

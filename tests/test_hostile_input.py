@@ -300,3 +300,25 @@ def test_play_to_wrl_of_a_very_long_stream_is_refused_up_front(tmp_path):
     r = _cli("play", "--example", tmp_path / "long.fap", "-o", tmp_path / "o.wrl")
     assert r.exit_code == 1 and "40,000 frames" in r.output and ".glb" in r.output
     assert sorted(p.name for p in tmp_path.iterdir()) == ["long.fap"]
+
+
+# -- memory bounded by the input (found by the long fuzzing run) ----------------------------------------
+
+@pytest.mark.parametrize("filler", ["blank lines", "comment lines", "numbers"])
+def test_long_number_runs_and_comment_runs_stay_in_proportion(filler):
+    import tracemalloc
+    body = {"blank lines": " \n" * 200_000 + "1 2 3",
+            "comment lines": "# c\n" * 100_000 + "1 2 3",
+            "numbers": "# unbracketed-path\n" + " ".join(["1.5"] * 150_000)}[filler]
+    text = ("#VRML V2.0 utf8\nShape { geometry IndexedFaceSet { coord Coordinate { point [ 0 0 0 "
+            + body + " ] } } }\n# " + "c\n#" * 50_000 + "\nGroup {}\n")
+    vrml.loads("#VRML V2.0 utf8\nGroup {}")
+    tracemalloc.start()
+    try:
+        with alarm(60, "reading"):
+            vrml.loads(text)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    # the regex engine once kept a backtracking entry per blank or comment: ~300 B each
+    assert peak < 6 * len(text), f"{peak / 1e6:.0f} MB for {len(text) / 1e6:.1f} MB of text"

@@ -304,14 +304,17 @@ def test_play_to_wrl_of_a_very_long_stream_is_refused_up_front(tmp_path):
 
 # -- memory bounded by the input (found by the long fuzzing run) ----------------------------------------
 
-@pytest.mark.parametrize("filler", ["blank lines", "comment lines", "numbers"])
-def test_long_number_runs_and_comment_runs_stay_in_proportion(filler):
+@pytest.mark.parametrize("filler", ["blank lines", "comment lines", "numbers", "a long string"])
+def test_long_runs_of_anything_stay_in_proportion(filler):
     import tracemalloc
     body = {"blank lines": " \n" * 200_000 + "1 2 3",
             "comment lines": "# c\n" * 100_000 + "1 2 3",
-            "numbers": "# unbracketed-path\n" + " ".join(["1.5"] * 150_000)}[filler]
+            "numbers": "# unbracketed-path\n" + " ".join(["1.5"] * 150_000),
+            "a long string": '1 2 3 ] } } } WorldInfo { title "' + " " * 300_000 + '" info [ "x"'
+            }[filler]
     text = ("#VRML V2.0 utf8\nShape { geometry IndexedFaceSet { coord Coordinate { point [ 0 0 0 "
-            + body + " ] } } }\n# " + "c\n#" * 50_000 + "\nGroup {}\n")
+            + body + " ] }" + (" } }" if filler != "a long string" else "") + "\n# "
+            + "c\n#" * 50_000 + "\nGroup {}\n")
     vrml.loads("#VRML V2.0 utf8\nGroup {}")
     tracemalloc.start()
     try:

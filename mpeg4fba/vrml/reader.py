@@ -132,7 +132,7 @@ class _FastLexer(Lexer):
         self.groups = (gi["ID"], gi["NUMBERS"], gi["STRING"], gi["P"])
         # The lenient reader's numbers also take a "nan" word (any case, not followed by
         # more of a name), tried before names: only a run starting with nan can be both.
-        core = r"(0[xX][0-9a-fA-F]+|(\d+\.?\d*|\.\d+)([eE][+-]?\d+)?)"
+        core = r"(?:0[xX][0-9a-fA-F]+|(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?)"
         if rx["NUMBERS"].count(core) != 2:
             raise AssertionError("the grammar's NUMBERS changed: update the lenient nan")
         word_end = r"(?![^\x00-\x20\x22\x23\x27\x2c\x2e\x5b\x5c\x5d\x7b\x7d\x7f])"

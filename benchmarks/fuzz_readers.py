@@ -155,7 +155,8 @@ def run(names: list, count: int, start: int, jobs: int, cpu: float, shared: bool
         time_limit: float) -> dict:
     """{reader: [result dicts]} for inputs start..start+count-1 of each reader."""
     import selectors
-    todo = [(n, s) for n in names for s in range(start, start + count)]
+    # interleaved, so a time limit cuts every reader's share alike
+    todo = [(n, s) for s in range(start, start + count) for n in names]
     results: dict = defaultdict(list)
     workers = [Worker(cpu, shared) for _ in range(max(1, jobs))]
     sel = selectors.DefaultSelector()

@@ -204,7 +204,7 @@ def _check_round_trip(scene, shared_paths):
                 assert _bits(read.fields[fname]) == _bits(v), f"{orig.type}.{fname} at {path}"
 
 
-@settings(max_examples=150, **COMMON)
+@settings(max_examples=80, **COMMON)
 @given(data=st.data())
 def test_random_scene_round_trips(data):
     scene, paths = data.draw(scenes(name_shared=True), label="scene")
@@ -294,7 +294,7 @@ def _mutate(data, buf: bytearray) -> bytearray:
     return buf
 
 
-@settings(max_examples=2000, **COMMON)
+@settings(max_examples=600, **COMMON)
 @given(data=st.data())
 def test_mutated_corpus_files_fail_only_with_vrml_error(small_positives, data):
     path, original = small_positives[data.draw(st.integers(0, len(small_positives) - 1),
@@ -342,7 +342,7 @@ def _with_both_loops(text: str, strict: bool = True, path=None) -> tuple:
     return ours, theirs
 
 
-@settings(max_examples=60, **COMMON)
+@settings(max_examples=20, **COMMON)
 @given(data=st.data())
 def test_generated_scenes_read_the_same_with_larks_loop(data):
     scene, _ = data.draw(scenes(name_shared=data.draw(st.booleans())))
@@ -350,7 +350,7 @@ def test_generated_scenes_read_the_same_with_larks_loop(data):
     assert isinstance(ours, Scene) and ours == theirs
 
 
-@settings(max_examples=300, **COMMON)
+@settings(max_examples=120, **COMMON)
 @given(data=st.data())
 def test_mutated_files_read_or_fail_the_same_with_larks_loop(small_positives, data):
     path, original = small_positives[data.draw(st.integers(0, len(small_positives) - 1),

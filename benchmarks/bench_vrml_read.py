@@ -401,20 +401,15 @@ def main(argv=None) -> int:
                   f"{rss_x:.2f}x payload ({mem['rss_increase'] / MB:.0f} MB)", "< 3x", rss_x < 3)
         res.other("  tracemalloc peak, same load", info["bytes"],
                   f"{tm_x:.2f}x payload ({mem['traced_peak'] / MB:.0f} MB)", "< 3x", tm_x < 3)
-        conv = measure_memory(ifs_path, payload, "convert")
-        c_rss, c_tm = conv["rss_increase"] / payload, conv["traced_peak"] / payload
-        print(f"{'  peak memory of load + dump (convert)':<40} peak RSS +{conv['rss_increase'] / MB:.1f} MB "
-              f"= {c_rss:.2f}x, tracemalloc peak {conv['traced_peak'] / MB:.1f} MB = {c_tm:.2f}x   "
-              f"target < 4x: {'met' if max(c_rss, c_tm) < 4 else 'MISSED'}", flush=True)
-        res.other("  peak RSS increase, load + dump (convert)", info["bytes"],
-                  f"{c_rss:.2f}x payload ({conv['rss_increase'] / MB:.0f} MB)", "< 4x", c_rss < 4)
-        inf = measure_memory(ifs_path, payload, "info")
-        i_rss, i_tm = inf["rss_increase"] / payload, inf["traced_peak"] / payload
-        print(f"{'  peak memory of load + summary (info)':<40} peak RSS +{inf['rss_increase'] / MB:.1f} MB "
-              f"= {i_rss:.2f}x, tracemalloc peak {inf['traced_peak'] / MB:.1f} MB = {i_tm:.2f}x   "
-              f"target < 4x: {'met' if max(i_rss, i_tm) < 4 else 'MISSED'}", flush=True)
-        res.other("  peak RSS increase, load + summary (info)", info["bytes"],
-                  f"{i_rss:.2f}x payload ({inf['rss_increase'] / MB:.0f} MB)", "< 4x", i_rss < 4)
+        for action, label in (("convert", "load + dump (convert)"),
+                              ("info", "load + summary (info)")):
+            m = measure_memory(ifs_path, payload, action)
+            a_rss, a_tm = m["rss_increase"] / payload, m["traced_peak"] / payload
+            print(f"{'  peak memory of ' + label:<40} peak RSS +{m['rss_increase'] / MB:.1f} MB "
+                  f"= {a_rss:.2f}x, tracemalloc peak {m['traced_peak'] / MB:.1f} MB = {a_tm:.2f}x   "
+                  f"target < 4x: {'met' if max(a_rss, a_tm) < 4 else 'MISSED'}", flush=True)
+            res.other(f"  peak RSS increase, {label}", info["bytes"],
+                      f"{a_rss:.2f}x payload ({m['rss_increase'] / MB:.0f} MB)", "< 4x", a_rss < 4)
 
         # 3. 4,096 Transforms
         tr_path = tmp / "transforms.wrl"

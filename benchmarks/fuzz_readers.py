@@ -74,7 +74,7 @@ def _on_timer(signum, frame):
 def worker(cpu_limit: float, shared: bool) -> None:
     """Read jobs ("reader seed" lines) from stdin, answer one JSON line each."""
     from fuzz import harness as h
-    import numpy  # noqa: F401 - loaded before the baseline, as every reader uses it
+    __import__("numpy")    # loaded before the baseline, as every reader uses it
     pools = {}
     folder = Path(tempfile.mkdtemp(prefix="mpeg4fba-fuzz-"))
     signal.signal(signal.SIGPROF, _on_timer)

@@ -294,16 +294,21 @@ def _mutate(data, buf: bytearray) -> bytearray:
     return buf
 
 
-@settings(max_examples=600, **COMMON)
-@given(data=st.data())
-def test_mutated_corpus_files_fail_only_with_vrml_error(small_positives, data):
+def _mutated(small_positives, data) -> tuple:
+    """(path, text) of a corpus file mutated 1-3 times, decoded as load() does (bytes
+    that are not UTF-8 become surrogate escapes)."""
     path, original = small_positives[data.draw(st.integers(0, len(small_positives) - 1),
                                                label="file")]
     buf = bytearray(original)
     for _ in range(data.draw(st.integers(1, 3), label="mutations")):
         buf = _mutate(data, buf)
-    # As load() does: bytes that are not UTF-8 become surrogate escapes.
-    text = bytes(buf).decode("utf-8", "surrogateescape")
+    return path, bytes(buf).decode("utf-8", "surrogateescape")
+
+
+@settings(max_examples=600, **COMMON)
+@given(data=st.data())
+def test_mutated_corpus_files_fail_only_with_vrml_error(small_positives, data):
+    path, text = _mutated(small_positives, data)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", vrml.VRMLWarning)
         try:
@@ -353,12 +358,7 @@ def test_generated_scenes_read_the_same_with_larks_loop(data):
 @settings(max_examples=120, **COMMON)
 @given(data=st.data())
 def test_mutated_files_read_or_fail_the_same_with_larks_loop(small_positives, data):
-    path, original = small_positives[data.draw(st.integers(0, len(small_positives) - 1),
-                                               label="file")]
-    buf = bytearray(original)
-    for _ in range(data.draw(st.integers(1, 3), label="mutations")):
-        buf = _mutate(data, buf)
-    text = bytes(buf).decode("utf-8", "surrogateescape")
+    path, text = _mutated(small_positives, data)
     strict = data.draw(st.booleans(), label="strict")
     ours, theirs = _with_both_loops(text, strict, path)
     assert ours == theirs

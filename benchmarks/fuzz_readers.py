@@ -18,7 +18,7 @@ and number (``harness.locate(reader, i)``).  Each input is read in a worker proc
 * the peak resident memory of each read, over the worker's resident memory before it
   (Linux: VmHWM reset through /proc/self/clear_refs): a read that grows it by more
   than 5x the input plus 32 MB (the interpreter's working set for any read) counts as
-  a memory blow-up too.
+  a memory blow-up too (for gzip input, 5x what it inflates to).
 
 It prints a table per reader: inputs, the reader's own errors, accepted, other
 exceptions (grouped by type and the frame that raised them), hangs and memory
@@ -114,10 +114,11 @@ def worker(cpu_limit: float, shared: bool) -> None:
         used = resource.getrusage(resource.RUSAGE_SELF)
         cpu = used.ru_utime + used.ru_stime - cpu0
         peak = max(0, (_status_kb("VmHWM") or 0) - rss0) * 1024
-        if kind in ("accepted", "error") and peak > 5 * len(data) + 32 * MB:
-            kind, detail = "memory", f"peak RSS +{peak / MB:.0f} MB for {len(data)} bytes"
+        size = h.payload(reader, data)
+        if kind in ("accepted", "error") and peak > 5 * size + 32 * MB:
+            kind, detail = "memory", f"peak RSS +{peak / MB:.0f} MB for {size} bytes"
         print(json.dumps({"reader": name, "seed": seed, "kind": kind, "detail": detail,
-                          "cpu": cpu, "peak": peak, "size": len(data)}), flush=True)
+                          "cpu": cpu, "peak": peak, "size": size}), flush=True)
 
 
 # -- the parent ---------------------------------------------------------------------------------

@@ -95,19 +95,24 @@ def _parse_slow(text: str, start: int, end: int, integer: bool,
             values.append(int(tok, 16))
         elif integer:
             if _NOT_INTEGER_RE.fullmatch(tok):
-                raise NumberError(f"expected an integer, found {tok!r}", pos)
+                raise NumberError(f"expected an integer, found {_cut(tok)!r}", pos)
             values.append(int(tok))
         else:
             values.append(float(tok))
         if isinstance(values[-1], int) and not _INT64_MIN <= values[-1] <= _INT64_MAX:
-            raise NumberError(f"{tok} is too large for an integer (VRML97 integers are "
+            raise NumberError(f"{_cut(tok)} is too large for an integer (VRML97 integers are "
                               "32-bit)", pos)
         if not integer and np.isinf(float(values[-1])):
-            raise NumberError(f"{tok} is too large for a 64-bit float", pos)
+            raise NumberError(f"{_cut(tok)} is too large for a 64-bit float", pos)
         pos = _SEPARATORS_RE.match(text, m.end(), end).end()
     if integer:
         return np.array(values, dtype=np.int64)
     return np.array(values, dtype=np.float64)
+
+
+def _cut(token: str, limit: int = 40) -> str:
+    """A number's text for a message: a 400-digit one shown by its start and length."""
+    return token if len(token) <= limit else f"{token[:limit]}... ({len(token)} characters)"
 
 
 def _convert_chunk(chunk: str, base: int, text: str, start: int, end: int, integer: bool,

@@ -164,6 +164,7 @@ class Reader:
     own_seeds: Callable            # () -> [(label, bytes)]
     shared_seeds: Callable = lambda: []
     nesting: tuple = (b"[", b"]")  # how this format nests, for the deep-nesting mutation
+    compressed: bool = False       # gzip: memory is judged against what it inflates to
 
 
 def _read_vrml(path):
@@ -206,11 +207,30 @@ def _vrml_seeds() -> list:
     return own + [("example_scene", _face_seed())]
 
 
+def _gzip_seeds() -> list:
+    import gzip
+    return [(label + ".gz", gzip.compress(data, mtime=0)) for label, data in _vrml_seeds()]
+
+
+def payload(reader: Reader, data: bytes, cap: int = 1 << 28) -> int:
+    """The bytes a reader works on: the input, or for gzip what it inflates to (up to
+    ``cap``; the reader's own inflation limits stop it sooner)."""
+    if not reader.compressed:
+        return len(data)
+    import zlib
+    d = zlib.decompressobj(16 + zlib.MAX_WBITS)
+    try:
+        return max(len(data), len(d.decompress(data, cap)))
+    except zlib.error:
+        return len(data)
+
+
 READERS: dict = {r.name: r for r in (
     Reader("vrml", ".wrl", _read_vrml, _vrml_seeds, _corpus_seeds,
            (b"Group { children [ ", b" ] }")),
     Reader("vrml-lenient", ".wrl", _read_vrml_lenient, _vrml_seeds, _corpus_seeds,
            (b"Transform { children ", b" }")),
+    Reader("vrml-gz", ".wrl.gz", _read_vrml, _gzip_seeds, compressed=True),
     Reader("face", ".wrl", _read_face,
            lambda: _files(FIXTURES / "fat", "*.wrl") + [("example_scene", _face_seed())],
            lambda: [], (b"Group { children [ ", b" ] }")),
@@ -309,6 +329,17 @@ def make_input(reader: Reader, pool: list, seed: int) -> bytes:
     """The input number ``seed`` for ``reader``: a seed from ``pool`` mutated 1-3 times."""
     rng = np.random.default_rng([seed, 0x5EED])
     data = pool[int(rng.integers(len(pool)))][1]
+    if reader.compressed and rng.random() < 0.75:
+        # mostly the text mutated under an intact gzip layer (a flipped byte of the
+        # stream itself only ever reaches the CRC check), sometimes a bomb of blanks
+        import gzip
+        text = gzip.decompress(data)
+        plain = [(label, gzip.decompress(d)) for label, d in pool]
+        for _ in range(int(rng.integers(1, 4))):
+            text = mutate_once(rng, text, plain, (b"Group { children [ ", b" ] }"))
+        if rng.random() < 0.05:          # past 16 MiB, where the ratio cap applies
+            text += b" " * int(rng.integers(17 << 20, 24 << 20))
+        return gzip.compress(text, compresslevel=6, mtime=0)
     for _ in range(int(rng.integers(1, 4))):
         data = mutate_once(rng, data, pool, reader.nesting)
     return data
@@ -381,4 +412,4 @@ if __name__ == "__main__":  # pragma: no cover - a quick look at the seeds
 
 
 __all__ = ["READERS", "Reader", "seeds", "make_input", "run_input", "own_error", "locate",
-           "minimise", "mutate_once", "shared_dir", "NASTY_NUMBERS"]
+           "minimise", "mutate_once", "shared_dir", "payload", "NASTY_NUMBERS"]

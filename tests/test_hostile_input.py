@@ -325,3 +325,23 @@ def test_long_runs_of_anything_stay_in_proportion(filler):
         tracemalloc.stop()
     # the regex engine once kept a backtracking entry per blank or comment: ~300 B each
     assert peak < 6 * len(text), f"{peak / 1e6:.0f} MB for {len(text) / 1e6:.1f} MB of text"
+
+
+# -- time bounded by the input (found by the long fuzzing run) -----------------------------------------
+
+def test_fap_value_line_with_a_huge_token_is_refused_at_once():
+    text = (Path(__file__).resolve().parents[1] / "spec_fixtures" / "fap" /
+            "minimal_2_1.fap").read_text().split("\n")
+    text[2] = "0 1 2 " + "9" * 200_000 + "{{{{"        # a value line: frame and 3 values
+    with alarm(10, "reading the .fap"):
+        _refused(lambda: loads_fap("\n".join(text), "a.fap"), "a.fap:3", "not a number",
+                 error=FapError)
+
+
+@pytest.mark.parametrize("token", ["9" * 100_000 + " 1e5", "9" * 5000])
+def test_vrml_integer_run_with_a_huge_token_is_refused_at_once(token):
+    text = ("#VRML V2.0 utf8\nShape { geometry IndexedFaceSet { coord Coordinate { point [ 0 0 0 ] }"
+            f" coordIndex [ 0 {token} ] }} }}")
+    with alarm(10, "reading"):
+        e = _refused(lambda: vrml.loads(text, path="h.wrl"), "h.wrl:2")
+    assert len(str(e)) < 400

@@ -70,7 +70,9 @@ _WIDTH = np.ones(N_FAPS, dtype=np.int64)
 _WIDTH[0], _WIDTH[1] = 4, 6
 _EXPONENT = re.compile(rb"[eE]")
 _POINT = re.compile(rb"\.")
-_NUMBER = re.compile(r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?")
+# possessive: a 100,000-digit token followed by a stray byte made the plain form
+# backtrack quadratically (minutes, found by the fuzzing run)
+_NUMBER = re.compile(r"[+-]?(?:\d++(?:\.\d*+)?|\.\d++)(?:[eE][+-]?\d++)?")
 _EXACT_INT = 2.0 ** 53          # integers below this are exact in a float64
 _POW10 = 10.0 ** np.arange(23)  # the powers of ten that are exact doubles
 _CHUNK = 16384                  # frames formatted at a time by the writer

@@ -44,9 +44,11 @@ __all__ = ["FieldType", "FIELD_TYPES", "Image", "NumberError", "parse_numbers",
 _NUM = r"[+-]?(?:0[xX][0-9a-fA-F]+|(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?)"
 _NUMBER_RE = re.compile(_NUM)
 _NAN_RE = re.compile(r"[+-]?[nN][aA][nN]")
-_SEPARATORS_RE = re.compile(r"(?:[\s,]+|#[^\n\r]*)*")
+# Possessive and anchored at token starts: a search through a 100,000-digit token once
+# backtracked quadratically (minutes; found by the fuzzing run).
+_SEPARATORS_RE = re.compile(r"(?:[\s,]++|#[^\n\r]*+)*+")
 _COMMENT_RE = re.compile(r"#[^\n\r]*")
-_NOT_INTEGER_RE = re.compile(r"[^\s,]*[.eE][^\s,]*")
+_NOT_INTEGER_RE = re.compile(r"(?<![^\s,])[^\s,.eE]*+[.eE][^\s,]*+")
 #: Whether the writer writes NaN (as ``nan``): only for what the lenient reader read
 #: (:func:`~mpeg4fba.vrml.writer.dumps` with ``strict=False``).
 WRITE_NAN: contextvars.ContextVar = contextvars.ContextVar("vrml_write_nan", default=False)
@@ -96,6 +98,9 @@ def _parse_slow(text: str, start: int, end: int, integer: bool,
         elif integer:
             if _NOT_INTEGER_RE.fullmatch(tok):
                 raise NumberError(f"expected an integer, found {_cut(tok)!r}", pos)
+            if len(tok) > 24:             # int() refuses 4,300 digits; none fits 64 bits
+                raise NumberError(f"{_cut(tok)} is too large for an integer (VRML97 "
+                                  "integers are 32-bit)", pos)
             values.append(int(tok))
         else:
             values.append(float(tok))

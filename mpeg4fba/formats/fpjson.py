@@ -68,7 +68,7 @@ from ..fba.fapu import FAPU
 from ..fba.featurepoints import FeaturePointError, FeaturePointSet, normalise_id, point_order
 from .._atomic import atomic_write
 from .errors import FormatError
-from .jsontext import loads_json, shown as _shown
+from .jsontext import loads_json, shown
 
 __all__ = ["FORMAT_NAME", "FORMAT_VERSION", "read_feature_points_json",
            "loads_feature_points_json", "write_feature_points_json",
@@ -220,7 +220,7 @@ def _parse(text: Union[str, bytes], path: Optional[str]) -> tuple:
             if not (isinstance(v, int) and not isinstance(v, bool) and 0 <= v < 2 ** 31):
                 raise check.error(_join(where, "vertex"),
                                   f"expected an integer >= 0 (a vertex index, below 2**31), "
-                                  f"not {_shown(v)}")
+                                  f"not {shown(v)}")
             mesh = point.get("mesh")
             if mesh is not None and not isinstance(mesh, str):
                 raise check.error(_join(where, "mesh"),

@@ -59,7 +59,7 @@ from ..fba.face import FaceMesh, FaceModel, FaceTransform
 from ..fba.morph import FULL_SHAPE, MorphTarget, fat_from_morph_targets
 from ..vrml.walk import fan_triangulate
 from .errors import FormatError
-from .jsontext import loads_json, shown as _json_shown
+from .jsontext import loads_json, shown as json_shown
 
 __all__ = ["read_morph_targets", "read_morph_face", "read_obj", "parse_obj", "read_mapping",
            "target_stem", "FORMATS"]
@@ -410,7 +410,7 @@ class _Gltf:
         """``value`` checked to be a whole number >= ``low``; ``where`` is its JSON path
         (``accessors[3].count``) for the error."""
         if not isinstance(value, int) or isinstance(value, bool) or value < low:
-            raise self.error(f"{where} is {_json_shown(value, 40)}, not a whole number "
+            raise self.error(f"{where} is {json_shown(value, 40)}, not a whole number "
                              f">= {low}")
         return value
 
@@ -488,7 +488,7 @@ class _Gltf:
         ap = f"accessors[{index}]"
         if acc.componentType not in _COMPONENTS or acc.type not in _WIDTH:
             raise self.error(f"{ap} (for {what}): unsupported accessor "
-                             f"{_json_shown(acc.componentType, 20)} {_json_shown(acc.type, 20)}")
+                             f"{json_shown(acc.componentType, 20)} {json_shown(acc.type, 20)}")
         dtype, width = np.dtype(_COMPONENTS[acc.componentType]), _WIDTH[acc.type]
         count = self.whole(acc.count, f"{ap}.count")
         if acc.bufferView is None:
@@ -512,7 +512,7 @@ class _Gltf:
                 raise self.error(f"{sp}: needs both indices and values")
             if s.indices.componentType not in (5121, 5123, 5125):
                 raise self.error(f"{sp}.indices.componentType is "
-                                 f"{_json_shown(s.indices.componentType, 20)}, not 5121, 5123 or 5125")
+                                 f"{json_shown(s.indices.componentType, 20)}, not 5121, 5123 or 5125")
             idx = self._view(s.indices.bufferView, s.indices.byteOffset,
                              np.dtype(_COMPONENTS[s.indices.componentType]), n, 1,
                              f"{sp}.indices")[:, 0].astype(np.int64)
@@ -617,7 +617,7 @@ def _gltf_shapes(path: PathLike, with_targets: bool) -> _Shapes:
         # pygltflib keeps whatever type the JSON had; a member of a type the checks
         # above did not foresee ends here, still as this file's error
         raise g.error(f"a member of the glTF document has a value of the wrong type or "
-                      f"range ({type(e).__name__}: {_json_shown(str(e), 120)})") from None
+                      f"range ({type(e).__name__}: {json_shown(str(e), 120)})") from None
 
 
 def _gltf_shapes_of(g: _Gltf, with_targets: bool) -> _Shapes:

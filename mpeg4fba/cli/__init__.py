@@ -47,6 +47,8 @@ def _one_line(error: BaseException) -> str:
 #: subcommand is imported when it runs.  ``tests/test_cli.py`` checks these against the
 #: commands' own help.
 COMMANDS = {
+    "batch": "Clone, validate and play many faces at once on Dask (a local cluster, or an "
+             "existing one with --scheduler).",
     "clone": "Clone the facial motion of SOURCE (default: the reference head) onto TARGET.",
     "convert": "Rewrite IN.wrl as canonical VRML97 in OUT.wrl (gzipped if OUT ends in .gz "
                "or .wrz); with --morph-targets, write the face that a neutral and its morph "

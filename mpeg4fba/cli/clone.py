@@ -107,74 +107,46 @@ def clone_command(faces: tuple, output: str, source_points: Optional[str], targe
     points_out = found_points_path(output)
     check_output(points_out, [(f, "a face") for f in faces] + [(output, "-o")],
                  suffixes=(".json",), what="the found points")
-    state: dict = {}
     times: dict = {}
+
+    from ..cloning.job import CloneJob
+    # the faces are given to the job when read (its first step here)
+    job = CloneJob(None, None, method=method, snap=snap, check=not no_check,
+                   scale=not no_scale,
+                   **({} if method == "local-frames" else
+                      dict(support=support, positions=positions, triangulation=triangulation)))
 
     def read() -> None:
         from ..formats.face_files import read_face
         if len(faces) == 2:
-            state["source"] = read_face(faces[0], source_points, lenient=lenient)
+            job.source = read_face(faces[0], source_points, lenient=lenient)
         else:
             from ..models import reference_head
-            state["source"] = reference_head()
-        state["target"] = read_face(faces[-1], target_points, lenient=lenient)
-        if not len(state["source"].fat):
-            raise click.ClickException(f"the source face {state['source'].name} has no FAT: "
+            job.source = reference_head()
+        job.target = read_face(faces[-1], target_points, lenient=lenient)
+        if not len(job.source.fat):
+            raise click.ClickException(f"the source face {job.source.name} has no FAT: "
                                        "nothing to clone")
-
-    def points() -> None:
-        # a head without (all) the points cloning needs gets them from its geometry
-        from ..cloning.autopoints import complete_points
-        state["points"] = complete_points(state["target"], snap=snap)
-        if state["points"].added and not state["points"].kept:
-            # all found: moved into the source's convention, so both faces' points agree
-            # (the mapping needs them to agree more than to be anyone's "right")
-            from ..cloning.autopoints import matched_points
-            state["target"].points = matched_points(state["target"], state["points"].found,
-                                                    state["source"])
-        if state["points"].added:
-            from ..formats.fpjson import write_feature_points_json
-            conf = state["points"].found.confidence
-            write_feature_points_json(state["target"].points.positions_only(), points_out,
-                                      confidences={k: conf[k] for k in state["points"].added if k in conf})
-
-    def mapping() -> None:
-        source, target = state["source"], state["target"]
-        if method == "local-frames":
-            from ..cloning import LocalFrameCloner
-            state["cloner"] = LocalFrameCloner(source, target, scale=not no_scale)
-        else:
-            from ..cloning import FacialMotionCloner
-            state["cloner"] = FacialMotionCloner(source, target, support=support,
-                                                 scale_motion=not no_scale, positions=positions,
-                                                 triangulation=triangulation)
-
-    def tables() -> None:
-        state["result"] = state["cloner"].clone()
-
-    def check() -> None:
-        from ..formats.validate import validate
-        state["report"] = validate(state["result"])
 
     def write() -> None:
         from ..formats.wrl_face import save_face
-        save_face(state["result"], output)
+        found = job.found_points()
+        if found:
+            from ..formats.fpjson import write_feature_points_json
+            write_feature_points_json(found[0], points_out, confidences=found[1])
+        save_face(job.result, output)
 
-    steps = [("reading the faces", read), ("finding feature points", points),
-             ("mapping the faces", mapping),
-             ("cloning the tables", tables)]
-    steps += [] if no_check else [("checking the result", check)]
-    steps.append(("writing", write))
     with warnings_to_stderr():
-        run_steps(steps, "mpeg4fba clone", times)
-    source, target, result = state["source"], state["target"], state["result"]
-    _say_points(state["points"], faces[-1], points_out)
+        run_steps([("reading the faces", read)] + job.steps() + [("writing", write)],
+                  "mpeg4fba clone", times)
+    source, target, result = job.source, job.target, job.result
+    _say_points(job.points, faces[-1], points_out)
     fat = result.fat
     click.echo(f"cloned {source.name} onto {target.name}: {len(fat.faps)} FAPs, "
                f"{len(fat.visemes)} visemes, {len(fat.expressions)} expressions "
                f"(mapping {times['mapping the faces']:.2f} s, tables {times['cloning the tables']:.2f} s); wrote {output}")
     if not no_check:
-        report = state["report"]
+        report = job.report
         errors = [f for f in report.findings if f.severity == "error"]
         worst = [f for f in report.findings if f.severity != "info"]
         click.echo(f"check: {len(errors)} errors, {len(worst) - len(errors)} warnings")

@@ -33,7 +33,8 @@ from .checks import PlacementError, check_placement
 from .autopoints import PointReport, complete_points
 from .detect import (CRISP_POINTS, FaceNotFoundError, FoundPoints, find_feature_points,
                      snap_points)
-from .fmc import CloneWarning, FacialMotionCloner, clone, required_points_missing
+from .fmc import CloneWarning, FacialMotionCloner, PreparedSource, clone, required_points_missing
+from .job import CloneJob
 from .local_frames import (LocalFrameCloner, LocalFrameWarning, TopologyError,
                            local_frame_clone)
 from .interp2d import antialiased_weights, interpolate, interpolation_weights
@@ -42,7 +43,7 @@ from .normalise import Normaliser, face_center, point_units, region_factors
 from .parts import PARTS, carry_part_points, find_parts, separate_parts
 from .projection import MOUTH_ANGLE, Projection, choose_axis, cylindrical_projection
 
-__all__ = ["clone", "FacialMotionCloner", "LocalFrameCloner", "LocalFrameWarning",
+__all__ = ["clone", "FacialMotionCloner", "PreparedSource", "CloneJob", "LocalFrameCloner", "LocalFrameWarning",
            "TopologyError", "local_frame_clone", "CloneWarning", "required_points_missing",
            "REQUIRED_POINTS", "FaceSpace", "align", "alignment_triangles",
            "interpolation_weights", "interpolate", "antialiased_weights",

@@ -24,7 +24,7 @@ from __future__ import annotations
 
 import warnings
 from dataclasses import dataclass, field
-from typing import Iterable, Optional
+from typing import Iterable, Optional, Union
 
 import numpy as np
 
@@ -89,11 +89,12 @@ def complete_points(face: FaceModel, *, required: Iterable[str] = REQUIRED_POINT
 
 
 def matched_points(target: FaceModel, found: FoundPoints, source: FaceModel, *,
-                   source_found: Optional[FoundPoints] = None) -> FeaturePointSet:
+                   source_found: Union[FoundPoints, FaceNotFoundError, None] = None) -> FeaturePointSet:
     """The target's ``found`` points moved into the source's convention: each skin point
     by the difference, on the source, between its given point and the one
     :func:`~mpeg4fba.cloning.detect.find_feature_points` finds there (``source_found``,
-    or found now), taken in the detector's frame of each face (eye separations, so it
+    or found now; a :class:`~mpeg4fba.cloning.detect.FaceNotFoundError` there stands for
+    a source the detector could not read), taken in the detector's frame of each face (eye separations, so it
     scales with the face), then put back on the target's mesh.
 
     A mapping is only as good as the agreement of its two faces' points: where the
@@ -118,9 +119,11 @@ def matched_points(target: FaceModel, found: FoundPoints, source: FaceModel, *,
         try:
             source_found = find_feature_points(source)
         except FaceNotFoundError as e:
-            warnings.warn(f"the found points are used as found (the source {source.name} "
-                          f"is not read as a face: {e})", stacklevel=2)
-            return FeaturePointSet(positions)
+            source_found = e
+    if isinstance(source_found, FaceNotFoundError):
+        warnings.warn(f"the found points are used as found (the source {source.name} "
+                      f"is not read as a face: {source_found})", stacklevel=2)
+        return FeaturePointSet(positions)
     ss, Rs = source_found.fit["s"], source_found.fit["R"]
     st, Rt = found.fit["s"], found.fit["R"]
     by_mesh: dict = {}

@@ -71,6 +71,7 @@ from ..fba.fat import FAT, FaceDefTable, table_borders
 from ..fba.featurepoints import FeaturePointSet, point_order
 from ..fba.requirements import fap_points, required_points
 from .checks import check_placement
+from .detect import FaceNotFoundError, find_feature_points
 from .correspondence import (ALIGNMENTS, DERIVE_DISTANCE, NECK_RATIO,
                              AlignOptions, Correspondence, correspond, derive_points)
 from .errors import CloneWarning, check_choice
@@ -86,10 +87,77 @@ from .transfer import map_skin, mesh_entries, motion_scale, source_skin_motion
 from .weights import (FACING, FACING_RESOLUTION, INTERPOLATIONS, OUTSIDE_RULES, OVERLAP_RULES,
                       WeightOptions, mapping_weights, slit_labels, visible_triangles)
 
-__all__ = ["clone", "FacialMotionCloner", "CloneWarning", "required_points_missing",
+__all__ = ["clone", "FacialMotionCloner", "PreparedSource", "CloneWarning", "required_points_missing",
            "OVERLAP_RULES", "OUTSIDE_RULES", "METHODS", "ALIGNMENTS", "NECK_RATIO",
            "INTERPOLATIONS", "FACING", "FACING_RESOLUTION",
            "DERIVE_DISTANCE", "visible_triangles"]
+
+
+class PreparedSource:
+    """The source's side of the cloning, worked out once and shared by any number of
+    targets (a batch sends it to each worker once): the source's placement checked,
+    its parts split off and found, its skin stacked in the normalised and alignment
+    spaces, every table's skin motion as one sparse matrix, and (on first use) the
+    feature points the detector finds on it, which put a target's found points into
+    the source's convention (:func:`~mpeg4fba.cloning.autopoints.matched_points`).
+
+    Cloning onto a target from a PreparedSource gives exactly what cloning from the
+    face itself gives; ``positions`` and ``mouth_angle`` are the cloner's.
+
+    >>> from mpeg4fba.models import reference_head
+    >>> source = PreparedSource(reference_head(resolution=0.5))
+    >>> len(source.motion[0]) == len(source.face.fat)
+    True
+    """
+
+    def __init__(self, source: FaceModel, *, positions: str = "global",
+                 mouth_angle: float = MOUTH_ANGLE, placement: bool = True):
+        if placement:
+            check_placement(source, "source")
+        self.face = source
+        self.positions, self.mouth_angle = positions, mouth_angle
+        #: the source with its parts split off (the mapping's source)
+        self.separated = separate_parts(source)
+        self.parts = find_parts(self.separated)
+        #: the Transform carrying each part's motion (None: its meshes move alone)
+        self.transforms = {p: source_transform(self.separated, m) for p, m in self.parts.items()}
+        self.skin = Skin(self.separated, self.parts, positions, mouth_angle)
+        _check_skin(self.skin, "source")
+
+    @cached_property
+    def motion(self) -> tuple:
+        """(tables sorted by key, each one's interval borders, the (Ns, 3K) sparse skin
+        motion of all of them at their borders), :meth:`FacialMotionCloner.clone`'s step 5."""
+        tables = sorted(self.separated.fat, key=lambda t: t.key)
+        borders = [table_borders(t) for t in tables]
+        columns = source_skin_motion(self.skin, set(self.transforms.values()), tables, borders)
+        return tables, borders, columns
+
+    @cached_property
+    def found(self):
+        """The feature points :func:`~mpeg4fba.cloning.detect.find_feature_points` finds
+        on the source, or the :class:`~mpeg4fba.cloning.detect.FaceNotFoundError` saying
+        why none were (kept, not raised: the found points are then used as found)."""
+        try:
+            return find_feature_points(self.face)
+        except FaceNotFoundError as e:
+            return e
+
+    def warm(self, detect: bool = True) -> "PreparedSource":
+        """Work out everything now (before it is sent to workers); ``detect``: the
+        source's found points too."""
+        self.motion
+        self.skin.normalised
+        if detect:
+            self.found
+        return self
+
+
+def _check_skin(skin: Skin, which: str) -> None:
+    if not len(skin.vertices):
+        raise ValueError(f"the {which} face ({skin.face.name}) has no skin: all its meshes "
+                         "were taken for eyes, teeth or tongue, by the feature points "
+                         "3.5, 3.6, 9.8-9.11 and 6.1-6.4 they hold")
 
 
 class FacialMotionCloner:
@@ -99,7 +167,8 @@ class FacialMotionCloner:
     Parameters
     ----------
     source, target : FaceModel
-        Both with the :data:`REQUIRED_POINTS`; the source's FAT is cloned.
+        Both with the :data:`REQUIRED_POINTS`; the source's FAT is cloned.  The source
+        may be a :class:`PreparedSource`, its side worked out once for many targets.
     support : float
         Radius of the anti-aliasing filter (alignment space; normalised space with the
         surface interpolation), 0 to turn it off.
@@ -109,14 +178,16 @@ class FacialMotionCloner:
         Normalise motion by the regional FAPU factors, the paper's method
         (:func:`~mpeg4fba.cloning.transfer.motion_scale`); False copies it as is.
     positions : str
-        "global" or "regional" (:mod:`~mpeg4fba.cloning.alignment`).
+        "global" (default) or "regional" (:mod:`~mpeg4fba.cloning.alignment`); with a
+        :class:`PreparedSource`, the one it was prepared with.
     triangulation : str or id triples
         "fixed", "delaunay" or id triples (:func:`~mpeg4fba.cloning.alignment.align`).
     lips, eyelids : bool
         Treat the lip regions, and the eyelids the same way (:mod:`~mpeg4fba.cloning.lips`).
     mouth_angle : float
         The mouth's angular width in the cylindrical projection
-        (:data:`~mpeg4fba.cloning.projection.MOUTH_ANGLE`).
+        (default :data:`~mpeg4fba.cloning.projection.MOUTH_ANGLE`; with a
+        :class:`PreparedSource`, the one it was prepared with).
     rigid_tolerance : float
         How far a part's mesh motion may be from rigid, as a fraction of its size, to
         become a Transform motion.
@@ -166,11 +237,12 @@ class FacialMotionCloner:
         (Nt, Ns) the mapping.
     """
 
-    def __init__(self, source: FaceModel, target: FaceModel, *, support: float = 0.02,
-                 samples: int = 8, scale_motion: bool = True, positions: str = "global",
+    def __init__(self, source: Union[FaceModel, "PreparedSource"], target: FaceModel, *,
+                 support: float = 0.02,
+                 samples: int = 8, scale_motion: bool = True, positions: Optional[str] = None,
                  triangulation: Union[str, Sequence] = "fixed", lips: bool = True,
                  eyelids: bool = True,
-                 mouth_angle: float = MOUTH_ANGLE, rigid_tolerance: float = 0.05,
+                 mouth_angle: Optional[float] = None, rigid_tolerance: float = 0.05,
                  min_motion: float = 1e-3, outside: str = "nearby", overlap: str = "nearest",
                  by_mesh: bool = True, alignment: str = "surface", neck: bool = True,
                  register: bool = True, interpolation: Optional[str] = None,
@@ -179,13 +251,25 @@ class FacialMotionCloner:
                  correspondence: Union[Correspondence, Callable[..., Correspondence],
                                        None] = None):
         # 0. the points, the options of the 2D interpolation, the placement
+        prepared = source if isinstance(source, PreparedSource) else None
+        if prepared is not None:
+            positions = prepared.positions if positions is None else positions
+            mouth_angle = prepared.mouth_angle if mouth_angle is None else mouth_angle
+            if (positions, mouth_angle) != (prepared.positions, prepared.mouth_angle):
+                raise ValueError(f"the source was prepared with positions={prepared.positions!r}, "
+                                 f"mouth_angle={prepared.mouth_angle!r}, not {positions!r}, "
+                                 f"{mouth_angle!r}: prepare it with the options of the cloning")
+            source = prepared.face
+        positions = "global" if positions is None else positions
+        mouth_angle = MOUTH_ANGLE if mouth_angle is None else mouth_angle
         check_faces(source, target)
         check_choice("outside", outside, OUTSIDE_RULES)
         self.outside = outside
         check_choice("overlap", overlap, OVERLAP_RULES)
         self.overlap = overlap
         for face, which in ((source, "source"), (target, "target")):
-            check_placement(face, which)
+            if face is not source or prepared is None:
+                check_placement(face, which)
         #: the target's part points carried over from the source (teeth and tongue given
         #: without points), id -> (mesh, vertex)
         matched, self.carried_points = match_parts(source, target)
@@ -198,26 +282,26 @@ class FacialMotionCloner:
                           CloneWarning, stacklevel=2)
         # eyes, teeth, tongue welded into another mesh become meshes of their own (the
         # cloned face is the target so split)
-        source, target = separate_parts(source), separate_parts(target, matched)
-        self.source, self.target = source, target
+        if prepared is None:
+            prepared = PreparedSource(source, positions=positions, mouth_angle=mouth_angle,
+                                      placement=False)
+        #: the source's side, worked out once (:class:`PreparedSource`)
+        self.prepared = prepared
+        target = separate_parts(target, matched)
+        self.source, self.target = prepared.separated, target
         self.scale_motion = bool(scale_motion)
         self.by_mesh = bool(by_mesh)
         self.rigid_tolerance = float(rigid_tolerance)
         self.min_motion = float(min_motion)
         # 1. the parts and the skin
-        self.source_parts = find_parts(source)
-        # the Transform carrying each source part's motion (None: its meshes move alone)
-        self.source_transforms = {p: source_transform(source, m) for p, m in self.source_parts.items()}
+        self.source_parts = prepared.parts
+        self.source_transforms = prepared.transforms
         #: part name -> why the target has no such part (for the warning)
         self.target_missing_parts: dict = {}
         self.target_parts = find_parts(target, self.target_missing_parts)
-        self.src = Skin(source, self.source_parts, positions, mouth_angle)
+        self.src = prepared.skin
         self.tgt = Skin(target, self.target_parts, positions, mouth_angle)
-        for skin, face, which in ((self.src, source, "source"), (self.tgt, target, "target")):
-            if not len(skin.vertices):
-                raise ValueError(f"the {which} face ({face.name}) has no skin: all its meshes "
-                                 "were taken for eyes, teeth or tongue, by the feature points "
-                                 "3.5, 3.6, 9.8-9.11 and 6.1-6.4 they hold")
+        _check_skin(self.tgt, "target")
         # the options of the correspondence and the weights
         check_choice("alignment", alignment, ALIGNMENTS)
         self.alignment = alignment
@@ -333,10 +417,7 @@ class FacialMotionCloner:
         out = self.target.copy()
         out.fat = FAT()
         # 5. the skin's motion, every table at once
-        tables = sorted(self.source.fat, key=lambda t: t.key)
-        borders = [table_borders(t) for t in tables]
-        columns = source_skin_motion(self.src, set(self.source_transforms.values()), tables,
-                                     borders)
+        tables, borders, columns = self.prepared.motion
         mapped = self.map_skin(columns).tocsc()
         installer = self.part_mapping.installer(out)
         new_tables = []

@@ -1,10 +1,10 @@
 """Batch work on a real Dask cluster (issue 22): two process workers on 127.0.0.1, six
 generated heads of different proportions plus a broken file.
 
-Each good head must come out exactly as the single ``mpeg4fba clone`` makes it (the
-same bytes), validated; the broken one is reported with its located error and the
-others go on; ``--resume`` skips the done ones; a worker killed in the middle of the
-run leaves every good head done and no partial file behind.
+The batch runs once with one worker killed (SIGKILL) in the middle; even so each good
+head must come out exactly as the single ``mpeg4fba clone`` makes it (the same bytes),
+validated, with no partial file left behind; the broken one is reported with its
+located error and the others go on; ``--resume`` skips the done ones.
 """
 from __future__ import annotations
 
@@ -65,11 +65,24 @@ def _targets(heads) -> list:
 
 @pytest.fixture(scope="module")
 def first_run(heads, client, tmp_path_factory):
+    """The batch, with one worker process killed (SIGKILL) while it works on a target,
+    as soon as the first result is in."""
     out = tmp_path_factory.mktemp("batch")
-    seen = []
+    seen, killed = [], []
+
+    def kill_one(record, counts):
+        seen.append(counts)
+        if killed:
+            return
+        busy = [w for w, keys in client.processing().items() if keys]
+        if busy:
+            pid = client.run(os.getpid, workers=[busy[0]])[busy[0]]
+            os.kill(pid, signal.SIGKILL)
+            killed.append(pid)
+
     results = clone_many(str(heads / "source.wrl"), _targets(heads), out, formats=("wrl",),
-                         preview=None, client=client, progress=lambda r, c: seen.append(c))
-    return out, results, seen
+                         preview=None, client=client, progress=kill_one)
+    return out, results, seen, killed
 
 
 @pytest.fixture(scope="module")
@@ -84,7 +97,7 @@ def single(heads, tmp_path_factory):
 
 
 def test_every_good_head_equals_the_single_clone(first_run, single):
-    out, results, _ = first_run
+    out, results, _, _ = first_run
     for name in GOOD:
         rec = results[name]
         assert rec["status"] == "ok", rec
@@ -93,7 +106,7 @@ def test_every_good_head_equals_the_single_clone(first_run, single):
 
 
 def test_the_broken_input_is_reported_and_the_rest_go_on(first_run):
-    out, results, seen = first_run
+    out, results, seen, _ = first_run
     rec = results["broken"]
     assert rec["status"] == "failed"
     assert "broken.wrl:3:" in rec["error"] and "multiple of 3" in rec["error"]
@@ -109,7 +122,7 @@ def test_the_broken_input_is_reported_and_the_rest_go_on(first_run):
 
 
 def test_resume_skips_the_done_ones(first_run, heads, client):
-    out, _, _ = first_run
+    out, _, _, _ = first_run
     before = {n: os.stat(out / n / f"{n}.wrl").st_mtime_ns for n in GOOD}
     again = clone_many(str(heads / "source.wrl"), _targets(heads), out, formats=("wrl",),
                        preview=None, client=client, resume=True)
@@ -125,32 +138,14 @@ def test_resume_skips_the_done_ones(first_run, heads, client):
     assert report_done(str(out / "head0"), "another key") is None
 
 
-def test_a_worker_killed_mid_run_still_ends_with_every_good_head(heads, client, first_run,
-                                                                 tmp_path):
-    out, _, _ = first_run
-    killed = []
-
-    def kill_one(record, counts):
-        if killed:
-            return
-        busy = [w for w, keys in client.processing().items() if keys]
-        if not busy:
-            return
-        pid = client.run(os.getpid, workers=[busy[0]])[busy[0]]
-        os.kill(pid, signal.SIGKILL)
-        killed.append(pid)
-
-    results = clone_many(str(heads / "source.wrl"), _targets(heads), tmp_path, formats=("wrl",),
-                         preview=None, client=client, progress=kill_one)
+def test_a_worker_killed_mid_run_leaves_every_good_head_done(first_run, client):
+    out, results, _, killed = first_run
     assert killed, "no worker was busy after the first result"
     assert results.counts() == {"ok": 6, "failed": 1}
-    for name in GOOD:
-        assert (tmp_path / name / f"{name}.wrl").read_bytes() == \
-            (out / name / f"{name}.wrl").read_bytes()
-    partial = [os.path.join(d, f) for d, _, files in os.walk(tmp_path) for f in files
+    partial = [os.path.join(d, f) for d, _, files in os.walk(out) for f in files
                if f.startswith(PARTIAL)]
     assert partial == []
-    client.wait_for_workers(2, timeout=60)      # the nanny restarted it
+    client.wait_for_workers(2, timeout=60)      # the nanny started another
 
 
 def test_glb_and_preview_per_target(heads, client, tmp_path):
@@ -163,7 +158,7 @@ def test_glb_and_preview_per_target(heads, client, tmp_path):
 
 
 def test_validate_and_play_batches(heads, client, first_run, tmp_path):
-    out, _, _ = first_run
+    out, _, _, _ = first_run
     stream_path = tmp_path / "talk.fap"
     from mpeg4fba.formats.fap import write_fap
     from mpeg4fba.models.phrase import demo_stream
@@ -258,3 +253,13 @@ def test_results_table_and_one_line_errors():
         [].pop()
     except IndexError as e:
         assert one_line(e).startswith("IndexError: pop from empty list (at test_batch.py:")
+
+
+def test_a_local_cluster_of_its_own(heads, tmp_path):
+    """Without a client or a scheduler, a batch starts (and stops) its own local cluster."""
+    seen = []
+    results = validate_many([str(heads / "head0.wrl")], workers=1, outdir=tmp_path,
+                            progress=lambda r, c: seen.append(r["status"]))
+    assert results.info["workers"] == 1 and seen == ["ok"]
+    assert [r["name"] for r in csv.DictReader(open(tmp_path / "results.csv"))] == \
+        [str(heads / "head0.wrl")]

@@ -167,13 +167,14 @@ def _face_digest(face) -> str:
 
 
 def _targets(targets: Iterable, points_dir: Optional[str]) -> list:
+    """Targets with absolute paths (a worker's working folder may not be ours)."""
     items = list(targets)
-    if all(isinstance(t, Target) for t in items) and items:
-        return items
-    out = expand_targets([os.fspath(t) for t in items], points_dir)
-    if not out:
+    if not (items and all(isinstance(t, Target) for t in items)):
+        items = expand_targets([os.fspath(t) for t in items], points_dir)
+    if not items:
         raise BatchError("no targets given")
-    return out
+    return [Target(os.path.abspath(t.path), t.points and os.path.abspath(t.points), t.name)
+            for t in items]
 
 
 def _prepare_outdir(outdir) -> str:
@@ -181,7 +182,7 @@ def _prepare_outdir(outdir) -> str:
     if os.path.exists(outdir) and not os.path.isdir(outdir):
         raise BatchError(f"{outdir}: the output must be a folder, and this is a file")
     os.makedirs(outdir, exist_ok=True)
-    return outdir
+    return os.path.abspath(outdir)
 
 
 def clone_many(source, targets: Iterable, outdir, *, source_points: Optional[str] = None,
@@ -273,7 +274,8 @@ def validate_many(files: Iterable, *, tolerance: float = 0.05, strict: bool = Fa
     with open_client(workers, scheduler, client) as c:
         info["workers"] = len(c.scheduler_info().get("workers", {}))
         info["dashboard"] = dashboard_link(c)
-        futures = [c.submit(validate_task, p, tolerance, strict, pure=False) for p in paths]
+        futures = [c.submit(validate_task, os.path.abspath(p), tolerance, strict, p, pure=False)
+                   for p in paths]
         records = _gather(futures, paths, progress, counts,
                           lambda n, e: {"name": n, "status": "failed", "error": e})
     info["seconds"] = round(time.perf_counter() - t0, 3)

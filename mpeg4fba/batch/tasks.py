@@ -197,12 +197,14 @@ def _clone(source, target: Target, settings: dict, folder: str, record: dict,
     return outputs
 
 
-def validate_task(path: str, tolerance: float = 0.05, strict: bool = False) -> dict:
+def validate_task(path: str, tolerance: float = 0.05, strict: bool = False,
+                  name: Optional[str] = None) -> dict:
     """Validate one face or FAP stream: status ``ok`` (no errors), ``invalid`` (read, with
-    errors) or ``failed`` (not read: ``error`` says why)."""
+    errors) or ``failed`` (not read: ``error`` says why); ``name`` is the record's name
+    (default ``path``)."""
     from ..formats.validate import validate
 
-    record = {"name": path, "status": "failed", "error": None,
+    record = {"name": name or path, "status": "failed", "error": None,
               "kind": "stream" if path.lower().endswith(".fap") else "face"}
     t0 = time.perf_counter()
     with _Caught():

@@ -30,6 +30,7 @@ import click
 
 from . import main, warnings_to_stderr
 from .common import check_output_folder, show_progress
+from .play import png_options
 
 __all__ = ["batch", "exit_code"]
 
@@ -222,10 +223,7 @@ def batch_validate(files: tuple, outdir: Optional[str], tolerance: float, lenien
               help="The folder for the faces' folders and the results table.")
 @click.option("--no-glb", is_flag=True, help="No glTF animation (.glb) per face and stream.")
 @click.option("--png", is_flag=True, help="PNG frames per face and stream, in <stream>/.")
-@click.option("--frames", metavar="FIRST:LAST", help="PNG frames only: which frames (default all).")
-@click.option("--size", default="480x560", show_default=True, metavar="WxH", help="PNG frame size.")
-@click.option("--view", default="front", show_default=True,
-              type=click.Choice(["front", "three-quarter", "profile"]), help="PNG camera.")
+@png_options
 @click.option("--lenient", is_flag=True, help="Read VRML leniently (keep non-VRML97 nodes).")
 @click.option("--resume", is_flag=True, help="Skip faces whose outputs are complete and unchanged.")
 @_cluster_options

@@ -38,7 +38,7 @@ import click
 from . import main, warnings_to_stderr
 from .common import check_output, check_output_folder
 
-__all__ = ["play", "load_face_arg", "load_stream_arg", "parse_size"]
+__all__ = ["play", "load_face_arg", "load_stream_arg", "parse_size", "png_options"]
 
 _GLTF = (".glb", ".gltf")
 _VRML = (".wrl", ".wrz", ".wrl.gz")
@@ -98,6 +98,16 @@ def _frames(spec: Optional[str], n: int) -> range:
     return range(first, last)
 
 
+def png_options(f):
+    """The PNG frame options of ``play`` and ``batch play``: --frames, --size, --view."""
+    f = click.option("--view", default="front", show_default=True,
+                     type=click.Choice(["front", "three-quarter", "profile"]), help="PNG camera.")(f)
+    f = click.option("--size", default="480x560", show_default=True, metavar="WxH",
+                     help="PNG frame size.")(f)
+    return click.option("--frames", metavar="FIRST:LAST",
+                        help="PNG frames only: which frames (default all).")(f)
+
+
 @main.command(epilog="\b\nExamples:\n  mpeg4fba play face.wrl talk.fap -o talk.glb"
                      "\n  mpeg4fba play face.wrl talk.fap -o talk.html"
                      "\n  mpeg4fba play face.wrl talk.fap -o talk.wrl"
@@ -107,10 +117,7 @@ def _frames(spec: Optional[str], n: int) -> range:
               help="OUT.glb, OUT.gltf, OUT.wrl, OUT.html, or a folder for PNG frames.")
 @click.option("--example", is_flag=True, help="Play on the reference head instead of FACE.")
 @click.option("--demo-stream", is_flag=True, help="Play the built-in demo phrase instead of STREAM.")
-@click.option("--frames", metavar="FIRST:LAST", help="PNG frames only: which frames (default all).")
-@click.option("--size", default="480x560", show_default=True, metavar="WxH", help="PNG frame size.")
-@click.option("--view", default="front", show_default=True,
-              type=click.Choice(["front", "three-quarter", "profile"]), help="PNG camera.")
+@png_options
 def play(files: tuple, output: str, example: bool, demo_stream: bool, frames: Optional[str],
          size: str, view: str) -> None:
     """Play STREAM on FACE and write the animation (the output's extension says how)."""

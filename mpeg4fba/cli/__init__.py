@@ -62,6 +62,7 @@ COMMANDS = {
               "them.",
     "render": "Render FACE (neutral or posed) to a PNG or JPEG: one view, a turntable or a "
               "cloning grid.",
+    "say": "Speak TEXT on FACE (default: the reference head), with sound.",
     "validate": "Check faces and FAP streams against the MPEG-4 FBA rules.",
 }
 

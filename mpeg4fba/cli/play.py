@@ -38,7 +38,8 @@ import click
 from . import main, warnings_to_stderr
 from .common import check_output, check_output_folder
 
-__all__ = ["play", "load_face_arg", "load_stream_arg", "parse_size", "png_options"]
+__all__ = ["play", "load_face_arg", "load_stream_arg", "parse_size", "png_options", "png_frames",
+           "frame_range"]
 
 _GLTF = (".glb", ".gltf")
 _VRML = (".wrl", ".wrz", ".wrl.gz")
@@ -84,7 +85,12 @@ def parse_size(size: str) -> tuple:
     return w, h
 
 
-def _frames(spec: Optional[str], n: int) -> range:
+def frame_range(spec: Optional[str], n: int) -> range:
+    """The frames a ``--frames FIRST:LAST`` value picks of ``n``.
+
+    >>> frame_range("2:5", 10), frame_range(None, 3), frame_range(":2", 10)
+    (range(2, 5), range(0, 3), range(0, 2))
+    """
     if spec is None:
         return range(n)
     try:
@@ -150,12 +156,13 @@ def play(files: tuple, output: str, example: bool, demo_stream: bool, frames: Op
             from ..render.player import write_player
             write_player(dumps_glb(face, stream), output, title=f"{face.name}: {stream.name or 'stream'}")
         else:
-            _png_frames(face, stream, output, _frames(frames, len(stream)), size, view)
+            png_frames(face, stream, output, frame_range(frames, len(stream)), size, view)
             return
     click.echo(f"wrote {output}: {len(stream)} frames at {stream.fps:g} fps on {face.name}")
 
 
-def _png_frames(face, stream, folder: str, frames: range, size: str, view: str) -> None:
+def png_frames(face, stream, folder: str, frames: range, size: str, view: str) -> None:
+    """Render ``frames`` of ``stream`` on ``face`` as ``folder/frame_0000.png``..."""
     from ..render.preview import render_face, save_png
 
     w, h = parse_size(size)

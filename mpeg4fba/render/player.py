@@ -17,7 +17,8 @@ the map defines (``three/addons/utils/BufferGeometryUtils.js``, three's own nami
 nothing else in them changes.
 
 For tests the page exposes ``window.__player`` (``ready``, ``duration``, ``error``,
-``setTime(t)``, ``play()``, ``pause()``, ``currentTime()``, ``active()``) and sets
+``setTime(t)``, ``play()``, ``pause()``, ``currentTime()``, ``audioTime()``, ``playing()``,
+``active()``) and sets
 ``document.body.dataset.ready = "1"`` once the face is drawn; a failure (no WebGL, a
 bad file) shows a message in the page and sets ``document.body.dataset.error``.
 
@@ -196,14 +197,17 @@ def _script_json(value) -> str:
     return json.dumps(value, separators=(",", ":"), allow_nan=False).replace("<", "\\u003c")
 
 
-def player_html(glb: bytes, *, title: str, faps: Optional[list] = None) -> str:
+def player_html(glb: bytes, *, title: str, faps: Optional[list] = None,
+                audio: Optional[bytes] = None) -> str:
     """One self-contained HTML page that plays ``glb`` (the bytes of a ``.glb``).
 
     ``title`` heads the page.  ``faps``, optional, adds a "FAPs" section to the panel:
     either one ``{fap: value}`` mapping (or :class:`~mpeg4fba.fba.stream.FapFrame`) per
     frame of the animation, frames spread evenly over its duration, whose non-zero values
     are listed at the current time; or a list of FAPs (numbers or names) the animation
-    drives, listed as they are.
+    drives, listed as they are.  ``audio``, optional, is a WAV file's bytes played with
+    the animation: the audio's clock then drives the animation (so the two can't drift),
+    and scrubbing moves both.
 
     >>> import struct
     >>> page = player_html(struct.pack("<4sII", b"glTF", 2, 12), title="t",
@@ -216,10 +220,17 @@ def player_html(glb: bytes, *, title: str, faps: Optional[list] = None) -> str:
     encoded = base64.b64encode(bytes(glb)).decode("ascii")
     glb_text = "\n".join(encoded[i:i + 76] for i in range(0, len(encoded), 76))
     licence = _web("LICENSE").decode("utf-8").replace("--", "- -").strip()
+    sound = ""
+    if audio is not None:
+        if bytes(audio[:4]) != b"RIFF" or bytes(audio[8:12]) != b"WAVE":
+            raise ValueError("audio must be the bytes of a WAV file")
+        sound = ('<audio id="audio" preload="auto" src="data:audio/wav;base64,'
+                 + base64.b64encode(bytes(audio)).decode("ascii") + '"></audio>')
     fill = {"LICENSE": licence, "VERSION": THREE_VERSION, "IMPORTMAP": _import_map_json(),
-            "GLB": glb_text, "FAPS": _script_json(payload), "JS": _PLAYER_JS,
+            "GLB": glb_text, "FAPS": _script_json(payload), "JS": _PLAYER_JS, "AUDIO": sound,
             "FAIL": failure_script("__player", "player", "duration: 0, setTime() {}, play() {}, "
-                                   "pause() {}, currentTime() { return 0; }, active() { return []; }"),
+                                   "pause() {}, currentTime() { return 0; }, audioTime() { return null; }, "
+                                   "active() { return []; }"),
             "TITLE": html.escape(str(title))}
     return re.sub(r"@([A-Z]+)@", lambda m: fill[m.group(1)], _TEMPLATE)
 
@@ -322,6 +333,7 @@ html,body{margin:0;height:100%;overflow:hidden;background:#8e9196;color:#e8e8e8;
 <div id="bar"><button id="play" type="button" title="Play / pause (space)">Pause</button><input id="scrub" type="range" min="0" max="0" step="any" value="0" aria-label="Time"><span id="time">0.00 / 0.00 s</span></div>
 <div id="msg">Loading the face...
 (this page needs JavaScript, ES modules and import maps)</div>
+@AUDIO@
 <script id="glb" type="application/octet-stream">@GLB@</script>
 <script id="fapdata" type="application/json">@FAPS@</script>
 <script>
@@ -456,6 +468,9 @@ async function main() {
     if (fapData.names) { $('faphead').textContent = 'FAPs animated'; rows($('faps'), fapData.names.map(n => [n, ''])); }
   }
 
+  // With sound, the audio's clock is the animation's: the mixer is set to the audio's
+  // time on every frame, so the two can't drift; scrubbing moves both.
+  const audio = $('audio');
   const time = () => action && duration > 0 ? action.time : 0;
   function active() {
     const weight = new Map();
@@ -488,10 +503,17 @@ async function main() {
   function setTime(t) {
     t = Math.min(Math.max(Number(t) || 0, 0), duration);
     if (action) mixer.setTime(duration > 0 ? Math.min(t, duration * (1 - 1e-6)) : 0);
+    if (audio && Math.abs(audio.currentTime - t) > 1e-3) audio.currentTime = t;
     draw();
   }
-  const play = () => { playing = duration > 0; draw(); };
-  const pause = () => { playing = false; draw(); };
+  function play() {
+    playing = duration > 0;
+    // a browser may refuse sound before the user has clicked: then the button starts it
+    if (audio && playing) audio.play().catch(() => { playing = false; draw(); });
+    draw();
+  }
+  const pause = () => { playing = false; if (audio) audio.pause(); draw(); };
+  if (audio) audio.addEventListener('ended', () => { if (playing) { audio.currentTime = 0; audio.play().catch(() => {}); } });
   const toggle = () => (playing ? pause() : play());
 
   button.addEventListener('click', () => { toggle(); button.blur(); });
@@ -503,13 +525,16 @@ async function main() {
   const ticker = new THREE.Clock();
   renderer.setAnimationLoop(() => {
     const dt = Math.min(ticker.getDelta(), 0.1);
-    if (playing) mixer.update(dt);
+    if (playing && audio) mixer.setTime(Math.min(audio.currentTime, duration * (1 - 1e-6)));
+    else if (playing) mixer.update(dt);
     controls.update();
     draw();
   });
 
   setTime(0);
+  if (audio) play();
   Object.assign(P, { duration, setTime, play, pause, currentTime: time,
+                     audioTime: () => audio ? audio.currentTime : null, playing: () => playing,
                      active: () => active().map(([name, w]) => ({ name, weight: w })) });
   P.ready = true;
   $('msg').hidden = true;

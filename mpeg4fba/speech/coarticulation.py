@@ -11,7 +11,7 @@ new one, ``viseme_select2`` the old, ``viseme_blend`` 0-63 the new one's share):
   new viseme is the larger share from its phoneme's first sample on;
 * closures (p, b, m): the window ends at the start, ``[a - h, a]``, so the lips are
   fully shut when the sound of the closure begins; a closure too short for any frame to
-  fall in its shut part gets its nearest frame shut.
+  fall in its shut part gets the frame at or just before its start shut.
 
 ``h`` is half of :data:`TRANSITION` (60 ms: coarticulation of adjacent visemes in
 running speech takes some 50-80 ms), and never more than half of either neighbouring
@@ -102,12 +102,14 @@ def phoneme_stream(phonemes: Sequence, sample_rate: int, n_samples: int, *, fps:
     span = hi[i] - lo[i]
     w = np.where(span > 0, np.clip((t - lo[i]) / np.where(span > 0, span, 1), 0, 1), 1.0)
     before = np.maximum(i - 1, 0)
-    # a closure with no frame where the lips are shut: its nearest frame shuts them
+    # a closure too short for a frame to fall where the lips are shut: the frame at or
+    # just before its start shuts them (lips close ahead of the burst; the frame after
+    # is the next phoneme's onset, kept for it)
     for j in np.flatnonzero(closure):
         stop = lo[j + 1] if j + 1 < len(a) else end
         inside = (t >= a[j]) & (t < stop)
         if not inside.any():
-            f = int(np.clip(round(a[j] * fps), 0, n - 1))
+            f = int(np.clip(np.floor(a[j] * fps + 1e-9), 0, n - 1))
             i[f], w[f], before[f] = j, 1.0, max(j - 1, 0)
     blend = np.round(63 * w).astype(int)
     visemes = np.column_stack([vis[i], vis[before], blend, np.zeros(n, int)])

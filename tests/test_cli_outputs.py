@@ -5,6 +5,8 @@ import os
 
 import numpy as np
 import pytest
+
+from mpeg4fba.speech import available as speech_available
 from click.testing import CliRunner
 
 from mpeg4fba.cli import main
@@ -29,15 +31,25 @@ def demo_dir(tmp_path_factory):
 
 def test_demo_writes_everything_and_it_is_valid(demo_dir):
     d, r = demo_dir
-    assert sorted(os.listdir(d)) == ["demo_phrase.fap", "player.html", "preview.png",
-                                     "report.txt", "target.glb", "target.wrl"]
+    spoken = speech_available()
+    assert sorted(os.listdir(d)) == ["demo_phrase.fap"] + ["demo_phrase.wav"] * spoken + [
+        "player.html", "preview.png", "report.txt", "target.glb", "target.wrl"]
     assert "written to" in r.stdout and "player.html" in r.stdout
     face = load_face(d / "target.wrl")
     assert len(face.fat.faps) == 66 and len(face.fat.visemes) == 14
     report = validate(str(d / "target.wrl"))
     assert report.ok and not [f for f in report.findings if f.rule == "FBA014"]
     assert "validation: OK" in (d / "report.txt").read_text()
-    assert len(read_fap(d / "demo_phrase.fap")) == len(demo_stream())
+    phrase = read_fap(d / "demo_phrase.fap")
+    if spoken:
+        # the phrase as eSpeak NG speaks it: as long as its sound, within a frame
+        from mpeg4fba.formats.wav import read_wav
+        samples, rate = read_wav(d / "demo_phrase.wav")
+        assert abs(phrase.duration - len(samples) / rate) <= 1 / phrase.fps
+        assert 'id="audio"' in (d / "player.html").read_text()
+        assert "spoken by eSpeak NG" in (d / "report.txt").read_text()
+    else:
+        assert len(phrase) == len(demo_stream())
     assert (d / "target.glb").read_bytes()[:4] == b"glTF"
 
 

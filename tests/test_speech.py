@@ -260,3 +260,19 @@ def test_the_player_plays_the_sound_in_step(tmp_path):
             assert errors == []
         finally:
             b.close()
+
+
+def test_the_demo_speaks_its_phrase_or_falls_back_to_the_silent_one(monkeypatch):
+    from mpeg4fba.cli.demo import demo_phrase
+    from mpeg4fba.models.phrase import PHRASE_TEXT, demo_stream
+    from mpeg4fba.speech import engine
+
+    stream, wav = demo_phrase()
+    samples, rate = loads_wav(wav)
+    assert abs(stream.duration - len(samples) / rate) <= 1 / stream.fps
+    assert stream.mask[:, 1].all() and stream.values[:, 18].any()     # joy arc, blinks
+    assert len(speech.say(PHRASE_TEXT).stream) == len(stream)
+    monkeypatch.setattr(engine, "_engine", None)
+    monkeypatch.setitem(sys.modules, "espeakng_loader", None)
+    stream, wav = demo_phrase()
+    assert wav is None and stream == demo_stream()

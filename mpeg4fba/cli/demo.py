@@ -5,12 +5,15 @@ and another mesh (the target, no FAT), clones every FAP, viseme and expression o
 target, validates the result (numeric FAP check included) and writes into OUT_DIR:
 
 * ``target.wrl``: the target with its new FAT (VRML97 with the MPEG-4 nodes as PROTOs);
-* ``target.glb``: the same as glTF, animated by the demo phrase (visemes, an arc of joy,
-  blinks, head motion; ``mpeg4fba/models/data/demo_phrase.fap``);
-* ``demo_phrase.fap``: that stream;
+* ``target.glb``: the same as glTF, animated by the demo phrase, "Hello! I am a cloned
+  face." (visemes, an arc of joy, blinks, head motion): spoken by eSpeak NG where the
+  speech extra is installed (:mod:`mpeg4fba.speech`), else the silent, hand-timed
+  ``mpeg4fba/models/data/demo_phrase.fap``;
+* ``demo_phrase.fap``: that stream, and ``demo_phrase.wav`` its sound when spoken;
 * ``preview.png``: both heads neutral, in the six expressions, in four visemes and in a
   combination of low-level FAPs;
-* ``player.html``: the animated target in the browser (one file, works from file://);
+* ``player.html``: the animated target in the browser, with the sound when spoken (one
+  file, works from file://);
 * ``report.txt``: what was done, the validation and the timings.
 
 Example
@@ -20,7 +23,7 @@ Example
 >>> from mpeg4fba.cli import main
 >>> d = tempfile.mkdtemp()
 >>> r = CliRunner().invoke(main, ["demo", d, "--quick"])
->>> r.exit_code, sorted(os.listdir(d))
+>>> r.exit_code, sorted(set(os.listdir(d)) - {"demo_phrase.wav"})
 (0, ['demo_phrase.fap', 'player.html', 'preview.png', 'report.txt', 'target.glb', 'target.wrl'])
 """
 from __future__ import annotations
@@ -36,7 +39,7 @@ from .._atomic import atomic_write
 from . import main
 from .common import check_output_folder
 
-__all__ = ["demo"]
+__all__ = ["demo", "demo_phrase"]
 
 #: The target's proportions (see :func:`mpeg4fba.models.reference_head`).
 TARGET = dict(face_width=1.15, jaw=0.9, nose=1.12, eye_spacing=1.08, mouth_width=0.9, seed=11)
@@ -59,7 +62,7 @@ def demo(out_dir: str, quick: bool) -> None:
     from ..formats.validate import validate
     from ..formats.wrl_face import save_face
     from ..models import reference_head
-    from ..models.phrase import PHRASE_TEXT, demo_stream
+    from ..models.phrase import PHRASE_TEXT
     from ..render.player import write_player
 
     check_output_folder(out_dir, hint="OUT_DIR")  # before the work, not after it
@@ -90,13 +93,15 @@ def demo(out_dir: str, quick: bool) -> None:
         state["report"] = validate(state["result"])
 
     def write():
-        stream = demo_stream()
-        state["stream"] = stream
+        stream, wav = demo_phrase()
+        state["stream"], state["spoken"] = stream, wav is not None
         save_face(state["result"], out / "target.wrl")
         write_glb(state["result"], out / "target.glb", stream)
         write_fap(stream, out / "demo_phrase.fap")
+        if wav is not None:
+            atomic_write(out / "demo_phrase.wav", wav)
         write_player((out / "target.glb").read_bytes(), out / "player.html",
-                     title=f"mpeg4fba demo: \u201c{PHRASE_TEXT}\u201d")
+                     title=f"mpeg4fba demo: \u201c{PHRASE_TEXT}\u201d", audio=wav)
 
     def preview():
         _preview(state["source"], state["result"], out / "preview.png", quick)
@@ -113,7 +118,8 @@ def demo(out_dir: str, quick: bool) -> None:
 
     report = state["report"]
     result = state["result"]
-    lines = _report(state["source"], result, report, times, notes, state["stream"])
+    lines = _report(state["source"], result, report, times, notes, state["stream"],
+                    state["spoken"])
     atomic_write(out / "report.txt", "\n".join(lines) + "\n")
     click.echo("\n".join(lines[:4]))
     click.echo(f"\nwritten to {out.resolve()}:")
@@ -121,14 +127,32 @@ def demo(out_dir: str, quick: bool) -> None:
                        ("target.glb", "the same as glTF, animated by the demo phrase"),
                        ("player.html", "open it in a browser to watch it talk"),
                        ("preview.png", "both heads: neutral, six expressions, four visemes, low-level FAPs"),
-                       ("demo_phrase.fap", "the FAP stream"),
-                       ("report.txt", "validation and timings")):
+                       ("demo_phrase.fap", "the FAP stream")) + ((
+                       ("demo_phrase.wav", "its sound (eSpeak NG), also inside player.html"),)
+                       if state["spoken"] else ()) + (
+                       ("report.txt", "validation and timings"),):
         click.echo(f"  {name:16s} {what}")
     if not report.ok:
         raise click.ClickException("the cloned face does not pass validation (see report.txt)")
 
 
-def _report(source, result, report, times, notes, stream) -> list:
+def demo_phrase() -> tuple:
+    """(the demo phrase's stream, its WAV bytes or None): spoken by eSpeak NG where the
+    speech extra is installed (its visemes and jaw, the demo's expression arc, blinks and
+    head motion), else the packaged silent phrase."""
+    from ..models.phrase import PHRASE_TEXT, demo_stream, with_life
+    try:
+        from ..speech import SpeechUnavailable, say
+        u = say(PHRASE_TEXT)
+    except (ImportError, SpeechUnavailable):
+        return demo_stream(), None
+    from ..formats.wav import dumps_wav
+    stream = with_life(u.stream)
+    stream.name = "demo_phrase"
+    return stream, dumps_wav(u.samples, u.sample_rate)
+
+
+def _report(source, result, report, times, notes, stream, spoken: bool) -> list:
     fat = result.fat
     measured = {k: v for k, v in report.ratios.items() if v is not None}
     worst = max((abs(v - 1) for v in measured.values()), default=0.0)
@@ -143,7 +167,9 @@ def _report(source, result, report, times, notes, stream) -> list:
         f"{len(measured)} FAPs measured, largest deviation {worst:.1%}",
         f"time: mapping {times.get('mapping', 0):.2f} s, cloning step "
         f"{times.get('cloning the motion', 0):.2f} s in all",
-        f"animation: {len(stream)} frames at {stream.fps:g} fps ({len(stream) / stream.fps:.1f} s)",
+        f"animation: {len(stream)} frames at {stream.fps:g} fps ({len(stream) / stream.fps:.1f} s), "
+        + ("spoken by eSpeak NG, with sound" if spoken else
+           'silent (pip install "mpeg4fba[speech]" to hear it spoken)'),
         "",
         "steps (seconds):",
     ]

@@ -14,13 +14,14 @@ phoneme mapped to the standard's viseme; consecutive visemes cross-fade through
 from __future__ import annotations
 
 from importlib import resources
+from typing import Optional
 
 import numpy as np
 
 from ..fba.stream import FapStream
 from ..fba.tables import FAP, N_FAPS, VISEMES
 
-__all__ = ["PHRASE", "demo_stream", "make_demo_stream", "PHRASE_TEXT"]
+__all__ = ["PHRASE", "demo_stream", "make_demo_stream", "PHRASE_TEXT", "with_life"]
 
 PHRASE_TEXT = "Hello! I am a cloned face."
 FPS = 25.0
@@ -54,13 +55,29 @@ def make_demo_stream() -> FapStream:
     share = np.clip((1.0 - frac) / 0.4, 0.0, 1.0)
     blend = np.round(63 * share).astype(int)
     visemes = np.column_stack([cur, nxt, blend, np.zeros(n, int)])
+    mask = np.zeros((n, N_FAPS), dtype=bool)
+    values = np.zeros((n, N_FAPS))
+    mask[:, 0] = True
+    base = FapStream(values, mask, FPS, visemes=visemes, name="demo_phrase")
+    return with_life(base, total)
+
+
+def with_life(stream: FapStream, total: Optional[float] = None) -> FapStream:
+    """``stream`` (its visemes and jaw kept) with the demo's life added over its length:
+    an arc of joy (FAP 2), two blinks, a little nodding and turning of the head, the
+    brows lifting on "Hello!".  The demo adds it to the phrase as spoken by
+    :mod:`mpeg4fba.speech` too.  ``total``: the seconds the arcs span (default the
+    stream's duration)."""
+    n = len(stream)
+    t = np.arange(n) / stream.fps * 1000.0
+    total = max(n / stream.fps if total is None else float(total), 1e-9)
+    values = stream.values.copy()
+    mask = stream.mask.copy()
     # an arc of joy: up through the phrase, down at the end
     u = t / 1000.0 / total
     joy = np.round(48 * np.sin(np.pi * np.clip(u * 1.1, 0, 1)) ** 2).astype(int)
     expressions = np.column_stack([np.full(n, 1), joy, np.zeros(n, int), np.zeros(n, int),
                                    np.zeros(n, int), np.zeros(n, int)])
-    values = np.zeros((n, N_FAPS))
-    mask = np.zeros((n, N_FAPS), dtype=bool)
 
     def put(fap: str, curve: np.ndarray) -> None:
         c = FAP[fap].number - 1
@@ -80,10 +97,9 @@ def make_demo_stream() -> FapStream:
     lift = 250 * np.exp(-0.5 * ((t / 1000.0 - 0.55) / 0.18) ** 2)
     for f in ("raise_l_i_eyebrow", "raise_r_i_eyebrow", "raise_l_m_eyebrow", "raise_r_m_eyebrow"):
         put(f, lift)
-    mask[:, 0] = True
     mask[:, 1] = True
-    return FapStream(values, mask, FPS, visemes=visemes, expressions=expressions,
-                     name="demo_phrase")
+    return FapStream(values, mask, stream.fps, visemes=stream.visemes, expressions=expressions,
+                     name=stream.name or "demo_phrase")
 
 
 def demo_stream() -> FapStream:

@@ -244,7 +244,7 @@ def test_the_player_plays_the_sound_in_step(tmp_path):
             assert both == pytest.approx([0.5, 0.5], abs=1e-3)
 
             def mouth_at(frame: int) -> np.ndarray:
-                page.evaluate(f"__player.setTime({(frame + 0.5) / fps})")
+                page.evaluate(f"__player.setTime({frame / fps})")
                 page.evaluate("() => new Promise(r => requestAnimationFrame(() => requestAnimationFrame(r)))")
                 png = page.screenshot()
                 return (mimage.imread(io.BytesIO(png), format="png")[..., :3] * 255).round()

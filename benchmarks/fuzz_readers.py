@@ -128,8 +128,12 @@ class Worker:
         cmd = [sys.executable, __file__, "--worker", "--cpu", str(cpu)]
         if not shared:
             cmd.append("--no-shared")
+        # one BLAS thread: the CPU limit is the process's CPU time, and idle BLAS threads
+        # spinning after a matrix product would be charged to whatever input came next
+        env = dict(os.environ, OPENBLAS_NUM_THREADS="1", OMP_NUM_THREADS="1",
+                   MKL_NUM_THREADS="1")
         self.proc = subprocess.Popen(cmd, stdin=subprocess.PIPE, stdout=subprocess.PIPE,
-                                     text=True, bufsize=1)
+                                     text=True, bufsize=1, env=env)
         self.job = None
 
     def send(self, name: str, seed: int) -> None:

@@ -9,9 +9,9 @@ and every output it lists there means the task is done (``--resume``).
 
 >>> import os, tempfile
 >>> d = tempfile.mkdtemp()
->>> rec = validate_task(os.path.join(d, "missing.wrl"))
->>> rec["status"], "missing.wrl" in rec["error"]
-('failed', True)
+>>> rec = validate_task(os.path.join(d, "missing.wrl"))    # the validator's FBA100
+>>> rec["status"], "missing.wrl" in rec["first_finding"]
+('invalid', True)
 """
 from __future__ import annotations
 

@@ -199,11 +199,13 @@ def test_the_command_line(heads, client, tmp_path):
     assert r.exit_code == 1 and "no file matches" in r.output
 
 
-def test_without_dask_the_batch_names_the_extra(monkeypatch):
+def test_without_dask_the_batch_names_the_extra(monkeypatch, heads, tmp_path):
     monkeypatch.setitem(sys.modules, "distributed", None)
     with pytest.raises(BatchError, match=r'mpeg4fba\[batch\]'):
         with open_client(workers=1):
             pass
+    r = CliRunner().invoke(main, ["batch", "validate", str(heads / "head0.wrl")])
+    assert r.exit_code == 1 and 'pip install "mpeg4fba[batch]"' in r.output
 
 
 # -- targets, manifests, results ------------------------------------------------------------

@@ -258,6 +258,7 @@ def test_results_table_and_one_line_errors():
         assert one_line(e).startswith("IndexError: pop from empty list (at test_batch.py:")
 
 
+@pytest.mark.filterwarnings("ignore:Port 8787 is already in use")   # another cluster's dashboard
 def test_a_local_cluster_of_its_own(heads, tmp_path):
     """Without a client or a scheduler, a batch starts (and stops) its own local cluster."""
     seen = []

@@ -276,3 +276,18 @@ def test_the_demo_speaks_its_phrase_or_falls_back_to_the_silent_one(monkeypatch)
     monkeypatch.setitem(sys.modules, "espeakng_loader", None)
     stream, wav = demo_phrase()
     assert wav is None and stream == demo_stream()
+
+
+def test_blinks_and_head_motion_unless_still():
+    text = "A longer sentence, so that the face has time to blink more than once or twice."
+    still = speech.say(text, life=False).stream
+    assert not still.mask[:, [18, 47, 48]].any()
+    alive = speech.with_blinks_and_head(still, seed=3)
+    assert np.array_equal(alive.visemes, still.visemes)            # the mouth alike
+    assert np.array_equal(alive.values[:, 2], still.values[:, 2])
+    lid = alive.values[:, 18]
+    blinks = int((np.diff((lid > 500).astype(int)) == 1).sum())
+    assert blinks >= 2 and alive.duration / blinks < 5.5
+    head = alive.values[:, [47, 48]]
+    assert 0 < np.abs(head).max() <= 5000 and np.abs(head[[0, -1]]).max() < 500   # rests at both ends
+    assert speech.say(text).stream.mask[:, [18, 19, 47, 48]].all()       # on by default

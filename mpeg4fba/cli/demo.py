@@ -143,7 +143,7 @@ def demo_phrase() -> tuple:
     from ..models.phrase import PHRASE_TEXT, demo_stream, with_life
     try:
         from ..speech import SpeechUnavailable, say
-        u = say(PHRASE_TEXT)
+        u = say(PHRASE_TEXT, life=False)     # the demo's own life is added below
     except (ImportError, SpeechUnavailable):
         return demo_stream(), None
     from ..formats.wav import dumps_wav

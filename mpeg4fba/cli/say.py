@@ -2,8 +2,8 @@
 
 eSpeak NG speaks TEXT; its phonemes, at their exact sample positions, become visemes
 with coarticulation (FAP 1), a jaw that follows the vowels (FAP 3) and, with
-``--expression``, an expression held through the phrase (FAP 2).  FACE (default: the
-reference head) plays it.  OUT by its extension:
+``--expression``, an expression held through the phrase (FAP 2); blinks and a little
+head motion unless ``--still``.  FACE (default: the reference head) plays it.  OUT by its extension:
 
 * ``OUT.html``: the player with the sound inside (one file, works from file://);
 * ``OUT.glb`` / ``OUT.gltf`` and ``OUT.wav`` beside it;
@@ -59,10 +59,11 @@ def wav_beside(output: str) -> str:
 @click.option("--expression", metavar="NAME|N", help="An expression held through the phrase (joy, 1...).")
 @click.option("--intensity", type=click.IntRange(0, 63), default=40, show_default=True,
               help="Its intensity, 0-63.")
+@click.option("--still", is_flag=True, help="No blinks or head motion: the mouth alone moves.")
 @png_options
 def say(text: str, face: Optional[str], output: str, voice: str, rate: int, fps: float,
-        expression: Optional[str], intensity: int, frames: Optional[str], size: str,
-        view: str) -> None:
+        expression: Optional[str], intensity: int, still: bool, frames: Optional[str],
+        size: str, view: str) -> None:
     """Speak TEXT on FACE (default: the reference head), with sound."""
     from ..speech import SpeechUnavailable
 
@@ -82,7 +83,7 @@ def say(text: str, face: Optional[str], output: str, voice: str, rate: int, fps:
         from ..speech import say as speak
         with warnings_to_stderr():
             u = speak(text, voice=voice, rate=rate, fps=fps, expression=expression,
-                      intensity=intensity)
+                      intensity=intensity, life=not still)
     except SpeechUnavailable as e:
         raise click.ClickException(str(e)) from None
     from ..formats.wav import dumps_wav, write_wav

@@ -14,6 +14,7 @@ Needs the ``speech`` extra: ``pip install "mpeg4fba[speech]"``.  Knows the stand
 """
 from __future__ import annotations
 
+import zlib
 from dataclasses import dataclass
 from typing import Optional, Union
 
@@ -24,12 +25,13 @@ from ..fba.tables import EXPRESSIONS
 from .coarticulation import JAW, TRANSITION, phoneme_stream, segments
 from .engine import (MAX_TEXT, RATES, PhonemeEvent, SpeechError, SpeechUnavailable, Synthesis,
                      available, list_voices, synthesize)
+from .life import with_blinks_and_head
 from .phonemes import PhonemeShape, phoneme_shape, phoneme_table
 
 __all__ = ["say", "Utterance", "synthesize", "Synthesis", "PhonemeEvent", "SpeechError",
            "SpeechUnavailable", "available", "list_voices", "phoneme_stream", "segments",
            "phoneme_shape", "phoneme_table", "PhonemeShape", "TRANSITION", "JAW", "MAX_TEXT",
-           "RATES"]
+           "RATES", "with_blinks_and_head"]
 
 
 @dataclass
@@ -53,14 +55,18 @@ class Utterance:
 def say(text: str, *, voice: str = "en", rate: int = 175, fps: float = 25.0,
         expression: Union[int, str, None] = None, intensity: int = 40,
         transition: float = TRANSITION, jaw: float = JAW,
-        pitch: Optional[int] = None) -> Utterance:
+        pitch: Optional[int] = None, life: bool = True) -> Utterance:
     """Speak ``text``: the FAP stream and the audio samples, in step.
 
     ``voice``: an eSpeak NG language or voice (``en``, ``en-us``, ``fr``...; the
     phoneme table is English, other languages' phonemes go through its fallback rule);
     ``rate`` words a minute; ``fps`` of the stream; ``expression`` (a number 0-6 or a
     name: ``joy``) held through the phrase at ``intensity`` (0-63); ``transition``
-    seconds of each viseme's blend; ``jaw`` the open_jaw value of the widest vowel.
+    seconds of each viseme's blend; ``jaw`` the open_jaw value of the widest vowel;
+    ``life``: blinks and a little head motion too (:mod:`~mpeg4fba.speech.life`, their
+    times drawn from the text).  eSpeak's timing varies by some milliseconds from one
+    synthesis to the next, so two calls may differ by that; the sound and the stream of
+    one call always agree.
     """
     if expression is not None:
         try:
@@ -75,4 +81,6 @@ def say(text: str, *, voice: str = "en", rate: int = 175, fps: float = 25.0,
     stream = phoneme_stream(s.phonemes, s.sample_rate, len(s.samples), fps=fps,
                             transition=transition, jaw=jaw, expression=expression,
                             intensity=intensity, name=" ".join(text.split())[:60])
+    if life:
+        stream = with_blinks_and_head(stream, seed=zlib.crc32(text.encode("utf-8")))
     return Utterance(text, stream, s.samples, s.sample_rate, s.phonemes)

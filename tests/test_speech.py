@@ -271,7 +271,8 @@ def test_the_demo_speaks_its_phrase_or_falls_back_to_the_silent_one(monkeypatch)
     samples, rate = loads_wav(wav)
     assert abs(stream.duration - len(samples) / rate) <= 1 / stream.fps
     assert stream.mask[:, 1].all() and stream.values[:, 18].any()     # joy arc, blinks
-    assert len(speech.say(PHRASE_TEXT).stream) == len(stream)
+    # spoken again: eSpeak's timing may differ by some milliseconds between calls
+    assert abs(len(speech.say(PHRASE_TEXT).stream) - len(stream)) <= 1
     monkeypatch.setattr(engine, "_engine", None)
     monkeypatch.setitem(sys.modules, "espeakng_loader", None)
     stream, wav = demo_phrase()

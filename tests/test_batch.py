@@ -97,13 +97,35 @@ def single(heads, tmp_path_factory):
     return out
 
 
+def _same_face_text(a: bytes, b: bytes) -> bool:
+    """The same VRML text, numbers equal to 1e-9 relative: a worker runs BLAS on one
+    thread (Dask's nanny sets that), the test process on several, and some OpenBLAS
+    builds (numpy 1.24's) then sum in another order, changing a last digit."""
+    if a == b:
+        return True
+    ta, tb = a.split(), b.split()
+    if len(ta) != len(tb):
+        return False
+    for x, y in zip(ta, tb):
+        if x == y:
+            continue
+        try:
+            fx, fy = float(x.rstrip(b",")), float(y.rstrip(b","))
+        except ValueError:
+            return False
+        if abs(fx - fy) > 1e-9 * max(1.0, abs(fx), abs(fy)):
+            return False
+    return True
+
+
 def test_every_good_head_equals_the_single_clone(first_run, single):
     out, results, _, _ = first_run
     for name in GOOD:
         rec = results[name]
         assert rec["status"] == "ok", rec
         assert rec["errors"] == 0 and rec["faps"] == 66 and rec["visemes"] == 14
-        assert (out / name / f"{name}.wrl").read_bytes() == (single / f"{name}.wrl").read_bytes()
+        assert _same_face_text((out / name / f"{name}.wrl").read_bytes(),
+                               (single / f"{name}.wrl").read_bytes()), name
 
 
 def test_the_broken_input_is_reported_and_the_rest_go_on(first_run):

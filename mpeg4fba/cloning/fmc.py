@@ -102,7 +102,27 @@ class PreparedSource:
     the source's convention (:func:`~mpeg4fba.cloning.autopoints.matched_points`).
 
     Cloning onto a target from a PreparedSource gives exactly what cloning from the
-    face itself gives; ``positions`` and ``mouth_angle`` are the cloner's.
+    face itself gives.
+
+    Parameters
+    ----------
+    source : FaceModel
+        The face whose FAT is cloned, with the :data:`REQUIRED_POINTS`.
+    positions, mouth_angle
+        The cloner's options of the same names (the skin's spaces depend on them).
+    placement : bool
+        Check the source's points lie on its meshes, in their units, first.
+
+    Attributes
+    ----------
+    face, separated : FaceModel
+        The source as given, and with its parts split off (the mapping's source).
+    parts, transforms : dict
+        :func:`~mpeg4fba.cloning.parts.find_parts`, and the Transform carrying each part.
+    skin : Skin
+        The stacked skin in the normalised and alignment spaces.
+    motion, found
+        On first use (:meth:`warm` works them out at once): see below.
 
     >>> from mpeg4fba.models import reference_head
     >>> source = PreparedSource(reference_head(resolution=0.5))

@@ -27,20 +27,38 @@ __all__ = ["CloneJob"]
 
 
 class CloneJob:
-    """The cloning of ``source`` (a FaceModel with a FAT, or a :class:`PreparedSource`)
-    onto ``target`` (changed in place: it gets the points found on it); both may be
-    given later, as attributes, before the steps run (``mpeg4fba clone`` reads them in a
-    step of its own).
+    """The cloning of one target as ``mpeg4fba clone`` runs it, step by step.
 
-    ``method`` is one of :data:`~mpeg4fba.cloning.fmc.METHODS`; ``snap`` moves the
-    target's given crisp points onto its geometry; ``check`` validates the result
-    (numeric FAP check included); ``scale`` scales the motion by the faces' FAPU; the
-    other ``options`` go to :class:`~mpeg4fba.cloning.fmc.FacialMotionCloner`.
+    Parameters
+    ----------
+    source : FaceModel or PreparedSource
+        The face whose FAT is cloned (a :class:`~mpeg4fba.cloning.fmc.PreparedSource`
+        when many targets share it).  Both faces may be given later, as attributes,
+        before the steps run (``mpeg4fba clone`` reads them in a step of its own).
+    target : FaceModel
+        The face that gets the FAT; changed in place: it gets the points found on it.
+    method : str
+        One of :data:`~mpeg4fba.cloning.fmc.METHODS`.
+    snap : bool
+        Move the target's given crisp points onto its geometry.
+    check : bool
+        Validate the result (numeric FAP check included).
+    scale : bool
+        Scale the motion by the faces' FAPU.
+    **options
+        For :class:`~mpeg4fba.cloning.fmc.FacialMotionCloner` (none with local frames).
 
-    After :meth:`run` (or each of :meth:`steps` in turn): ``points`` (the
-    :class:`~mpeg4fba.cloning.autopoints.PointReport`), ``cloner``, ``result`` (the
-    target with its FAT), ``report`` (the validator's, None without ``check``) and
-    ``times`` (step label -> seconds).
+    Attributes
+    ----------
+    points : PointReport
+        What :func:`~mpeg4fba.cloning.autopoints.complete_points` did to the target.
+    cloner : FacialMotionCloner or LocalFrameCloner
+    result : FaceModel
+        The target with its FAT.
+    report : Report or None
+        The validator's (None without ``check``).
+    times : dict
+        Step label -> seconds (:meth:`run`).
     """
 
     def __init__(self, source: Union[FaceModel, PreparedSource, None],

@@ -186,6 +186,18 @@ def test_validate_and_play_batches(heads, client, first_run, tmp_path):
     assert sorted(os.listdir(tmp_path / "p" / "head0" / "talk")) == ["frame_0000.png", "frame_0001.png"]
     assert (tmp_path / "p" / "head0" / "talk.glb").exists()
     assert played["head1"]["status"] == "failed" and "no FAT" in played["head1"]["error"]
+    again = play_many([str(out / "head0" / "head0.wrl")], [str(stream_path)], tmp_path / "p",
+                      png={"size": (64, 80), "view": "front", "frames": (0, 2)}, client=client,
+                      resume=True)
+    assert again["head0"]["status"] == "skipped"
+    # the command line: PNG frames only, one frame
+    r = CliRunner().invoke(main, ["batch", "play", str(out / "head0" / "head0.wrl"), "--stream",
+                                  str(stream_path), "-o", str(tmp_path / "q"), "--no-glb", "--png",
+                                  "--frames", "1:2", "--size", "32x40",
+                                  "--scheduler", client.scheduler.address])
+    assert r.exit_code == 0, r.output
+    assert os.listdir(tmp_path / "q" / "head0" / "talk") == ["frame_0001.png"]
+    assert not (tmp_path / "q" / "head0" / "talk.glb").exists()
 
 
 def test_the_command_line(heads, client, tmp_path):

@@ -109,11 +109,31 @@ def _gather(futures: list, names: list, progress: Optional[Progress],
         except Exception as e:          # noqa: BLE001 - recorded, the batch goes on
             record = failed_record(name, one_line(e))
         out[name] = record
-        counts[record.get("status", "failed")] = counts.get(record.get("status", "failed"), 0) + 1
-        if progress is not None:
-            progress(record, dict(counts))
+        _tally(record, counts, progress)
         fut.release()
     return out
+
+
+def _tally(record: dict, counts: dict, progress: Optional[Progress]) -> None:
+    """Count a finished record by its status and tell ``progress``."""
+    status = record.get("status", "failed")
+    counts[status] = counts.get(status, 0) + 1
+    if progress is not None:
+        progress(record, dict(counts))
+
+
+def _on_cluster(workers: Optional[int], scheduler: Optional[str], client, info: dict,
+                on_client: Optional[Callable], submit: Callable, names: list,
+                progress: Optional[Progress], counts: dict,
+                failed_record: Callable[[str, str], dict]) -> dict:
+    """Open the cluster, note its size and dashboard in ``info``, ``submit(client)`` the
+    tasks (their futures, in the order of ``names``) and gather their records."""
+    with open_client(workers, scheduler, client) as c:
+        info["workers"] = len(c.scheduler_info().get("workers", {}))
+        info["dashboard"] = dashboard_link(c)
+        if on_client is not None:
+            on_client(c)
+        return _gather(submit(c), names, progress, counts, failed_record)
 
 
 def _source_key(source, source_points: Optional[str]) -> list:
@@ -153,9 +173,7 @@ def _not_done(items: list, keys: dict, outdir: str, resume: bool, records: dict,
             todo.append(tg)
             continue
         records[tg.name] = dict(done, status="skipped")
-        counts["skipped"] = counts.get("skipped", 0) + 1
-        if progress is not None:
-            progress(records[tg.name], dict(counts))
+        _tally(records[tg.name], counts, progress)
     return todo
 
 
@@ -239,17 +257,15 @@ def clone_many(source, targets: Iterable, outdir, *, source_points: Optional[str
         prepared = PreparedSource(face, **prep).warm(detect=_needs_points(todo) if detect is None
                                                      else bool(detect))
         info["prepare_seconds"] = round(time.perf_counter() - t, 3)
-        with open_client(workers, scheduler, client) as c:
-            info["workers"] = len(c.scheduler_info().get("workers", {}))
-            info["dashboard"] = dashboard_link(c)
-            if on_client is not None:
-                on_client(c)
+        def submit(c) -> list:
             shared = c.scatter(prepared, broadcast=True, hash=False)
-            futures = [c.submit(clone_task, shared, tg, settings, outdir, keys[tg.name],
-                                key=f"clone-{tg.name}-{keys[tg.name][:12]}", pure=False)
-                       for tg in todo]
-            by_name = {tg.name: tg for tg in todo}
-            records.update(_gather(futures, [tg.name for tg in todo], progress, counts,
+            return [c.submit(clone_task, shared, tg, settings, outdir, keys[tg.name],
+                             key=f"clone-{tg.name}-{keys[tg.name][:12]}", pure=False)
+                    for tg in todo]
+
+        by_name = {tg.name: tg for tg in todo}
+        records.update(_on_cluster(workers, scheduler, client, info, on_client, submit,
+                                   list(by_name), progress, counts,
                                    lambda n, e: {"name": n, "target": by_name[n].path,
                                                  "points": by_name[n].points,
                                                  "status": "failed", "error": e,
@@ -262,21 +278,21 @@ def clone_many(source, targets: Iterable, outdir, *, source_points: Optional[str
 
 def validate_many(files: Iterable, *, tolerance: float = 0.05, strict: bool = False,
                   outdir=None, workers: Optional[int] = None, scheduler: Optional[str] = None,
-                  client=None, progress: Optional[Progress] = None) -> Results:
+                  client=None, progress: Optional[Progress] = None,
+                  on_client: Optional[Callable] = None) -> Results:
     """Validate every face and FAP stream of ``files`` (names or glob patterns); with
-    ``outdir``, write the results table there."""
+    ``outdir``, write the results table there.  ``progress`` and ``on_client`` as for
+    :func:`clone_many`."""
     t0 = time.perf_counter()
     paths = [t.path for t in expand_targets([os.fspath(f) for f in files])]
     if not paths:
         raise BatchError("no files given")
     info: dict = {"tolerance": tolerance, "strict": strict}
     counts: dict = {}
-    with open_client(workers, scheduler, client) as c:
-        info["workers"] = len(c.scheduler_info().get("workers", {}))
-        info["dashboard"] = dashboard_link(c)
-        futures = [c.submit(validate_task, os.path.abspath(p), tolerance, strict, p, pure=False)
-                   for p in paths]
-        records = _gather(futures, paths, progress, counts,
+    records = _on_cluster(workers, scheduler, client, info, on_client,
+                          lambda c: [c.submit(validate_task, os.path.abspath(p), tolerance,
+                                              strict, p, pure=False) for p in paths],
+                          paths, progress, counts,
                           lambda n, e: {"name": n, "status": "failed", "error": e})
     info["seconds"] = round(time.perf_counter() - t0, 3)
     results = Results("validate", [records[p] for p in paths], info)
@@ -288,11 +304,13 @@ def validate_many(files: Iterable, *, tolerance: float = 0.05, strict: bool = Fa
 def play_many(faces: Iterable, streams: Sequence, outdir, *, glb: bool = True,
               png: Optional[dict] = None, lenient: bool = False, resume: bool = False,
               workers: Optional[int] = None, scheduler: Optional[str] = None, client=None,
-              progress: Optional[Progress] = None) -> Results:
+              progress: Optional[Progress] = None,
+              on_client: Optional[Callable] = None) -> Results:
     """Play every stream (``.fap`` paths or FapStreams) on every face into
     ``outdir/<face>/``: ``<stream>.glb`` and, with ``png`` (``{"size": (w, h), "view":
     "front", "frames": (first, last) or None}``), PNG frames in ``<stream>/``.  The
-    streams are read once and sent to each worker once."""
+    streams are read once and sent to each worker once.  ``resume``, ``progress`` and
+    ``on_client`` as for :func:`clone_many`."""
     from ..fba.stream import FapStream
     from ..formats.fap import read_fap
 
@@ -327,13 +345,13 @@ def play_many(faces: Iterable, streams: Sequence, outdir, *, glb: bool = True,
     todo = _not_done(items, keys, outdir, resume, records, counts, progress)
     info = {"streams": [n for n, _ in named], "settings": settings, "outdir": outdir}
     if todo:
-        with open_client(workers, scheduler, client) as c:
-            info["workers"] = len(c.scheduler_info().get("workers", {}))
-            info["dashboard"] = dashboard_link(c)
+        def submit(c) -> list:
             shared = c.scatter(named, broadcast=True, hash=False)
-            futures = [c.submit(play_task, tg.path, tg.name, shared, settings, outdir,
-                                keys[tg.name], pure=False) for tg in todo]
-            records.update(_gather(futures, [tg.name for tg in todo], progress, counts,
+            return [c.submit(play_task, tg.path, tg.name, shared, settings, outdir,
+                             keys[tg.name], pure=False) for tg in todo]
+
+        records.update(_on_cluster(workers, scheduler, client, info, on_client, submit,
+                                   [tg.name for tg in todo], progress, counts,
                                    lambda n, e: {"name": n, "status": "failed", "error": e}))
     info["seconds"] = round(time.perf_counter() - t0, 3)
     results = Results("play", [records[t.name] for t in items], info)

@@ -123,18 +123,28 @@ def clone_task(source, target: Target, settings: dict, outdir: str,
     ``preview`` (a (width, height) or None) and ``options`` (for the cloner)."""
     folder = os.path.join(outdir, target.name)
     record = {"name": target.name, "target": target.path, "points": target.points,
-              "status": "failed", "error": None, "folder": folder}
+              "status": "failed", "error": None, "folder": folder, "warnings_raised": 0}
     extra: dict = {"times": {}, "warnings": []}
+    return _in_folder(folder, record, key, extra,
+                      lambda: _clone(source, target, settings, folder, record, extra))
+
+
+def _in_folder(folder: str, record: dict, key: Optional[str], extra: dict, work) -> dict:
+    """Run ``work()`` (it returns the names of the outputs it wrote) for a task whose
+    outputs go to ``folder``: an error becomes the record's, the warnings raised go to
+    the report (their count to the record's ``warnings_raised`` when it has one), the
+    time to ``seconds``; then the report is written (:func:`_finish`)."""
     outputs: list = []
     t0 = time.perf_counter()
     with _Caught() as caught:
         try:
             os.makedirs(folder, exist_ok=True)
-            outputs = _clone(source, target, settings, folder, record, extra)
+            outputs = work()
         except Exception as e:          # noqa: BLE001 - recorded, the batch goes on
             record["error"] = one_line(e)
     extra["warnings"] = caught.lines
-    record["warnings_raised"] = len(caught.lines)
+    if "warnings_raised" in record:
+        record["warnings_raised"] = len(caught.lines)
     record["seconds"] = round(time.perf_counter() - t0, 3)
     if not os.path.isdir(folder):
         return record
@@ -231,23 +241,9 @@ def play_task(face_path: str, name: str, streams: list, settings: dict, outdir: 
     ``<stream>/`` (``settings["png"]``: size, view, frame range)."""
     folder = os.path.join(outdir, name)
     record = {"name": name, "face": face_path, "stream": ";".join(s for s, _ in streams),
-              "status": "failed", "error": None, "folder": folder}
-    outputs: list = []
-    extra: dict = {"warnings": []}
-    t0 = time.perf_counter()
-    with _Caught() as caught:
-        try:
-            os.makedirs(folder, exist_ok=True)
-            outputs = _play(face_path, streams, settings, folder, record)
-            record["status"] = "ok"
-        except Exception as e:          # noqa: BLE001 - recorded, the batch goes on
-            record["error"] = one_line(e)
-    extra["warnings"] = caught.lines
-    record["outputs"] = len(outputs)
-    record["seconds"] = round(time.perf_counter() - t0, 3)
-    if not os.path.isdir(folder):
-        return record
-    return _finish(folder, record, key, outputs, extra)
+              "status": "failed", "error": None, "folder": folder, "outputs": 0}
+    return _in_folder(folder, record, key, {"warnings": []},
+                      lambda: _play(face_path, streams, settings, folder, record))
 
 
 def _play(face_path: str, streams: list, settings: dict, folder: str, record: dict) -> list:
@@ -276,4 +272,5 @@ def _play(face_path: str, streams: list, settings: dict, folder: str, record: di
                 save_png(os.path.join(folder, rel),
                          render_face(face, playback, frame=i, size=png["size"], view=png["view"]))
                 outputs.append(rel)
+    record["status"], record["outputs"] = "ok", len(outputs)
     return outputs

@@ -206,7 +206,7 @@ def batch_validate(files: tuple, outdir: Optional[str], tolerance: float, lenien
     try:
         results = validate_many([t.path for t in paths], tolerance=tolerance, strict=not lenient,
                                 outdir=outdir, workers=workers, scheduler=scheduler,
-                                progress=progress)
+                                progress=progress, on_client=_on_client)
     finally:
         progress.close()
     if outdir is not None:
@@ -256,7 +256,7 @@ def batch_play(faces: tuple, streams: tuple, outdir: str, no_glb: bool, png: boo
         with warnings_to_stderr():
             results = play_many(targets, list(streams), outdir, glb=not no_glb, png=spec,
                                 lenient=lenient, resume=resume, workers=workers,
-                                scheduler=scheduler, progress=progress)
+                                scheduler=scheduler, progress=progress, on_client=_on_client)
     finally:
         progress.close()
     click.echo(f"wrote {os.path.join(outdir, 'results.csv')} and results.json")

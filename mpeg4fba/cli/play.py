@@ -39,7 +39,7 @@ from . import main, warnings_to_stderr
 from .common import check_output, check_output_folder
 
 __all__ = ["play", "load_face_arg", "load_stream_arg", "parse_size", "png_options", "png_frames",
-           "frame_range"]
+           "frame_range", "is_folder_output"]
 
 _GLTF = (".glb", ".gltf")
 _VRML = (".wrl", ".wrz", ".wrl.gz")
@@ -83,6 +83,17 @@ def parse_size(size: str) -> tuple:
         raise click.BadParameter(f"{size!r}: each side from 1 to {MAX_SIDE} pixels",
                                  param_hint="--size")
     return w, h
+
+
+def is_folder_output(output: str) -> bool:
+    """Whether ``-o`` names a folder (of PNG frames): no extension, a trailing slash, or
+    an existing folder.
+
+    >>> is_folder_output("frames"), is_folder_output("frames/"), is_folder_output("a.glb")
+    (True, True, False)
+    """
+    return (not os.path.splitext(output)[1] or output.endswith(("/", os.sep))
+            or os.path.isdir(output))
 
 
 def frame_range(spec: Optional[str], n: int) -> range:
@@ -134,8 +145,7 @@ def play(files: tuple, output: str, example: bool, demo_stream: bool, frames: Op
         raise click.UsageError(f"unexpected argument {files[0]!r}")
     low = output.lower()
     inputs = [(face_path, "FACE"), (stream_path, "STREAM")]
-    folder = not os.path.splitext(output)[1] or output.endswith(("/", os.sep)) \
-        or os.path.isdir(output)
+    folder = is_folder_output(output)
     if folder:
         check_output_folder(output, inputs)
     else:  # "talk.mp4" is more likely a mistake than the name of a folder of frames

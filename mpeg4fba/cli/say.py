@@ -22,7 +22,7 @@ import click
 
 from . import main, warnings_to_stderr
 from .common import check_output, check_output_folder
-from .play import load_face_arg, png_options
+from .play import is_folder_output, load_face_arg, png_options
 
 __all__ = ["say", "wav_beside"]
 
@@ -68,8 +68,7 @@ def say(text: str, face: Optional[str], output: str, voice: str, rate: int, fps:
     from ..speech import SpeechUnavailable
 
     low = output.lower()
-    ext = os.path.splitext(output)[1]
-    folder = not ext or output.endswith(("/", os.sep)) or os.path.isdir(output)
+    folder = is_folder_output(output)
     inputs = [(face, "FACE")]
     if folder:
         check_output_folder(output, inputs)
@@ -89,7 +88,6 @@ def say(text: str, face: Optional[str], output: str, voice: str, rate: int, fps:
     from ..formats.wav import dumps_wav, write_wav
 
     stream = u.stream
-    wav = dumps_wav(u.samples, u.sample_rate)
     written = []
     if low.endswith(".wav") and not folder:
         write_wav(u.samples, u.sample_rate, output)
@@ -111,7 +109,7 @@ def say(text: str, face: Optional[str], output: str, voice: str, rate: int, fps:
             from ..formats.gltf import dumps_glb
             from ..render.player import write_player
             write_player(dumps_glb(head, stream), output, title=f"{head.name}: \u201c{text}\u201d",
-                         audio=wav)
+                         audio=dumps_wav(u.samples, u.sample_rate))
             written.append(output)
         else:
             from .play import frame_range, png_frames

@@ -287,9 +287,9 @@ class FacialMotionCloner:
         self.outside = outside
         check_choice("overlap", overlap, OVERLAP_RULES)
         self.overlap = overlap
-        for face, which in ((source, "source"), (target, "target")):
-            if face is not source or prepared is None:
-                check_placement(face, which)
+        if prepared is None:          # a prepared source was checked when prepared
+            check_placement(source, "source")
+        check_placement(target, "target")
         #: the target's part points carried over from the source (teeth and tongue given
         #: without points), id -> (mesh, vertex)
         matched, self.carried_points = match_parts(source, target)

@@ -105,12 +105,13 @@ def phoneme_stream(phonemes: Sequence, sample_rate: int, n_samples: int, *, fps:
     # a closure too short for a frame to fall where the lips are shut: the frame at or
     # just before its start shuts them (lips close ahead of the burst; the frame after
     # is the next phoneme's onset, kept for it)
-    for j in np.flatnonzero(closure):
-        stop = lo[j + 1] if j + 1 < len(a) else end
-        inside = (t >= a[j]) & (t < stop)
-        if not inside.any():
-            f = int(np.clip(np.floor(a[j] * fps + 1e-9), 0, n - 1))
-            i[f], w[f], before[f] = j, 1.0, max(j - 1, 0)
+    shut = np.flatnonzero(closure)
+    stop = np.append(lo[1:], end)[shut]
+    first = np.searchsorted(t, a[shut])          # the first frame at or after the start
+    missed = (first >= n) | (t[np.minimum(first, n - 1)] >= stop)
+    for j in shut[missed]:
+        f = int(np.clip(np.floor(a[j] * fps + 1e-9), 0, n - 1))
+        i[f], w[f], before[f] = j, 1.0, max(j - 1, 0)
     blend = np.round(63 * w).astype(int)
     visemes = np.column_stack([vis[i], vis[before], blend, np.zeros(n, int)])
     values = np.zeros((n, N_FAPS))

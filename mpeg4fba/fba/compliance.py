@@ -6,8 +6,9 @@ text of a file (node types, where a node is) live with the file readers, in
 :mod:`mpeg4fba.formats.validate`; here are the rules on objects.
 
 The numeric check is one no other tool has: each low-level FAP of the FAT is played
-alone at a test value, and the feature point it moves (the vertex nearest to it) must
-move along the FAP's direction by value x FAPU / 1024 (a rotation FAP must turn its
+alone at a test value, and the feature point it moves (the vertex it is tied to, else
+the vertex nearest to it; of a closed slit's two copies of that place, the one the FAP
+moves) must move along the FAP's direction by value x FAPU / 1024 (a rotation FAP must turn its
 Transform by value x 1e-5 rad).  The ratio of what it does to what the standard says is
 reported per FAP; more than 5% off is flagged.
 
@@ -221,8 +222,8 @@ def check_fat(face: FaceModel) -> list:
 def fap_ratios(face: FaceModel, value: float = TEST_VALUE) -> dict:
     """Per low-level FAP with a table: what it does at ``value`` over what it should.
 
-    For a translation FAP: the displacement of the vertex nearest to its feature point,
-    projected on the FAP's axis, over value x FAPU unit.  For a rotation FAP: the angle
+    For a translation FAP: the displacement of its feature point's vertex (see
+    :func:`_translation_ratio`), projected on the FAP's axis, over value x FAPU unit.  For a rotation FAP: the angle
     its Transform turns by, over value x 1e-5.  A one-sided FAP is played at +value, a
     FAP whose table only has negative intervals at -value.  None where it can't be
     measured (no feature point position, no FAPU, scale/curl FAPs).
@@ -246,35 +247,60 @@ def fap_ratios(face: FaceModel, value: float = TEST_VALUE) -> dict:
     return out
 
 
-def _nearest_vertex(face: FaceModel, fp: str) -> Optional[tuple]:
+#: Vertices this close to a feature point's nearest vertex (a fraction of ES0) are the
+#: same place: a closed slit (a mouth, an eye) duplicates its vertices along the seam,
+#: one copy per lip or lid, and a point on the seam belongs to both sides.
+SEAM = 1e-3
+
+
+def _measuring_vertices(face: FaceModel, fp: str, es0: float) -> list:
+    """(mesh, vertex) candidates whose motion measures a FAP of feature point ``fp``: its
+    vertex (the one the point is tied to, else the nearest of all meshes) and that
+    vertex's copies (any vertex within :data:`SEAM` x ES0 of it)."""
     if fp not in face.points:
-        return None
-    target = face.points[fp]
-    best = None
-    for name, mesh in face.meshes.items():
-        w = face.world_vertices(name)
-        if not len(w):
-            continue
-        d = np.linalg.norm(w - target, axis=1)
-        i = int(np.argmin(d))
-        if best is None or d[i] < best[2]:
-            best = (name, i, float(d[i]))
-    return best
+        return []
+    worlds = {name: face.world_vertices(name) for name in face.meshes}
+    tie = face.points.vertex(fp)
+    if tie is not None and tie[0] in worlds and 0 <= tie[1] < len(worlds[tie[0]]):
+        at = worlds[tie[0]][tie[1]]
+    else:
+        target = np.asarray(face.points[fp], dtype=np.float64)
+        best = None
+        for name, w in worlds.items():
+            if len(w):
+                i = int(np.argmin(np.linalg.norm(w - target, axis=1)))
+                d = float(np.linalg.norm(w[i] - target))
+                if best is None or d < best[0]:
+                    best = (d, w[i])
+        if best is None:
+            return []
+        at = best[1]
+    return [(name, int(i)) for name, w in worlds.items() if len(w)
+            for i in np.flatnonzero(np.linalg.norm(w - at, axis=1) <= SEAM * es0)]
 
 
 def _translation_ratio(face, table, record, p, unit) -> Optional[float]:
+    """The measured ratio at the feature point's vertex; on a seam (several vertices at
+    the point, see :data:`SEAM`) the copy the FAP moves most along its axis: the FAP of
+    the upper lip acts on the upper lip's copy, the lower lip's FAP on the lower one's
+    (the standard puts the point on the seam and leaves the copies to the model)."""
     from .stream import FapStream
     fp = record.feature_point
-    hit = _nearest_vertex(face, fp)
-    if hit is None or unit <= 0:
+    hits = _measuring_vertices(face, fp, face.fapu.ES0 if face.fapu is not None else 0.0)
+    if not hits or unit <= 0:
         return None
-    mesh, index, _ = hit
     play = face.play(FapStream.from_values({table.fap: [0.0, p]}, fps=1))
-    w = play.world_vertices(mesh)
-    moved = w[1, index] - w[0, index]
+    axis = np.asarray(record.axis, float)
     expected = p * unit
-    along = float(np.dot(moved, np.asarray(record.axis, float)))
-    return along / expected if expected else None
+    if not expected:
+        return None
+    best = None
+    for mesh, index in hits:
+        w = play.world_vertices(mesh)
+        along = float(np.dot(w[1, index] - w[0, index], axis))
+        if best is None or abs(along) > abs(best):
+            best = along
+    return best / expected
 
 
 def _rotation_ratio(face, table, p) -> Optional[float]:

@@ -99,12 +99,12 @@ def _srgb_to_linear(c: np.ndarray) -> np.ndarray:
     return np.where(c <= 0.04045, c / 12.92, ((c + 0.055) / 1.055) ** 2.4)
 
 
-def _quaternions(R: np.ndarray) -> np.ndarray:
+def quaternions(R: np.ndarray) -> np.ndarray:
     """Unit quaternions [f, 4] (x, y, z, w) of rotation matrices [f, 3, 3], vectorised
     (Shepperd: each from its largest diagonal term, so none divides by ~0), signs made
     continuous so that slerp between keyframes takes the short way.
 
-    >>> _quaternions(rotation_matrices((0, 0, 1), [np.pi / 2])).round(6).tolist()
+    >>> quaternions(rotation_matrices((0, 0, 1), [np.pi / 2])).round(6).tolist()
     [[0.0, 0.0, 0.707107, 0.707107]]
     """
     R = np.asarray(R, dtype=np.float64).reshape(-1, 3, 3)
@@ -246,7 +246,7 @@ def _stream_weights(face: FaceModel, slots: dict, stream: FapStream) -> dict:
     return out
 
 
-def _driven(face: FaceModel) -> dict:
+def driven_transforms(face: FaceModel) -> dict:
     """Transform name -> the fields FaceDefTransforms drive, in field order."""
     out: dict = {}
     for table in face.fat:
@@ -321,7 +321,7 @@ def _trs(t: FaceTransform, rotation: np.ndarray, translation: np.ndarray,
     Transform's (R, T, S) per frame: T + C, R . SR, S (see the module doc)."""
     SR = rotation_matrices(t.scale_orientation[:3], [t.scale_orientation[3]])[0]
     c = np.asarray(t.center, dtype=np.float64)
-    return (np.asarray(translation, float) + c, _quaternions(np.asarray(rotation) @ SR),
+    return (np.asarray(translation, float) + c, quaternions(np.asarray(rotation) @ SR),
             np.asarray(scale, float))
 
 
@@ -337,7 +337,7 @@ def _pivot(t: FaceTransform) -> Optional[tuple]:
     SR = rotation_matrices(t.scale_orientation[:3], [t.scale_orientation[3]])[0]
     if not c.any() and np.allclose(SR, np.eye(3), rtol=0, atol=1e-15):
         return None
-    return -(SR.T @ c), _quaternions(SR.T[None])[0]
+    return -(SR.T @ c), quaternions(SR.T[None])[0]
 
 
 def _optional(value: np.ndarray, default: tuple) -> Optional[list]:
@@ -479,7 +479,7 @@ def _animation(face: FaceModel, stream: FapStream, slots: dict, outer: dict, mes
         if W.shape[1]:
             channel(mesh_node[mesh], "weights",
                     _float32(W.reshape(-1), f"mesh {mesh}: morph weights"))
-    driven = _driven(face)
+    driven = driven_transforms(face)
     if driven:
         frames = face.play(stream)
         for name, fields in driven.items():

@@ -53,7 +53,7 @@ from ..fba.fat import rotation_matrices
 from ..fba.stream import FapStream
 from ..vrml.scene import Node, Route, Scene
 from ..vrml.writer import dump
-from .gltf import _driven, _quaternions
+from .gltf import driven_transforms, quaternions
 from .wrl_face import _Namer, scene_from_face
 
 __all__ = ["animated_scene", "write_animated_wrl", "CLOCK_NAME"]
@@ -72,7 +72,7 @@ def _axis_angles(R: np.ndarray) -> np.ndarray:
     >>> _axis_angles(rotation_matrices((0, 1, 0), [0.0, 0.5])).round(6).tolist()
     [[0.0, 0.0, 1.0, 0.0], [0.0, 1.0, 0.0, 0.5]]
     """
-    q = _quaternions(R)
+    q = quaternions(R)
     s = np.linalg.norm(q[:, :3], axis=1)
     axis = np.where(s[:, None] > 0, q[:, :3] / np.where(s > 0, s, 1.0)[:, None], [0.0, 0.0, 1.0])
     return np.column_stack([axis, 2 * np.arctan2(s, q[:, 3])])
@@ -150,7 +150,7 @@ def animated_scene(face: FaceModel, stream: FapStream, *, protos: bool = True) -
             coord.name = unique(f"{node.name}_coord")
         drive(Node("CoordinateInterpolator", name=unique(f"{node.name}_motion"), key=key,
                    keyValue=V.reshape(-1, 3)), coord, "set_point")
-    for name, fields in _driven(face).items():
+    for name, fields in driven_transforms(face).items():
         node = transforms[name]
         t = frames.transform(name)
         neutral = face.transforms[name]

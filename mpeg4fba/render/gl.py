@@ -8,7 +8,7 @@ and, if not, why.
 
 The picture is the software renderer's: the scene (camera, framing of the neutral face,
 culling, colours, Lambert and fill lights per vertex) is built once by
-``preview._scene`` and only drawn here, with a depth buffer in place of the painter's
+``preview.build_scene`` and only drawn here, with a depth buffer in place of the painter's
 sort and 4x multisampling in place of Agg's antialiasing.  Corners are lit on the CPU
 (numpy, the one lighting formula for both backends, so they can't drift apart) and their
 colours interpolated across each triangle in screen space (``noperspective``), as Agg's
@@ -38,7 +38,7 @@ from typing import Mapping, Optional, Sequence, Union
 
 import numpy as np
 
-from .preview import _BACKGROUND, _Scene, _scene
+from .preview import BACKGROUND, Scene, build_scene
 
 __all__ = ["gl_available", "render_face_gl", "GLRenderError"]
 
@@ -107,7 +107,7 @@ class _Renderer:
             self._size, self._fbos = (w, h), (draw, resolve)
         return self._fbos
 
-    def draw(self, scene: _Scene) -> np.ndarray:
+    def draw(self, scene: Scene) -> np.ndarray:
         import moderngl
 
         w, h = scene.width, scene.height
@@ -122,7 +122,7 @@ class _Renderer:
             except moderngl.Error as exc:
                 raise GLRenderError(f"OpenGL failed to draw: {exc}") from exc
 
-    def _draw(self, scene: _Scene, data: np.ndarray, moderngl) -> np.ndarray:
+    def _draw(self, scene: Scene, data: np.ndarray, moderngl) -> np.ndarray:
         ctx, (w, h) = self.ctx, (scene.width, scene.height)
         draw, resolve = self._framebuffers(w, h)
         draw.use()
@@ -147,7 +147,7 @@ class _Renderer:
         return np.frombuffer(raw, np.uint8).reshape(h, w, 3)[::-1].copy()
 
 
-def _vertices(scene: _Scene) -> np.ndarray:
+def _vertices(scene: Scene) -> np.ndarray:
     """Interleaved ``[3m, 6]`` float32 vertices (x, y, z in normalised device
     coordinates; r, g, b) of the scene's triangles.  z is affine in 1 / depth, as a
     perspective projection's is, so it interpolates linearly across the screen."""
@@ -219,8 +219,8 @@ def _self_test(renderer: _Renderer) -> None:
     polys = np.array([[[-2, -2], [4, -2], [-2, 4]]] * 2, float)
     depths = np.array([[1.0] * 3, [2.0] * 3])
     colors = np.array([[[0.0, 1.0, 0.0]] * 3, [[1.0, 0.0, 0.0]] * 3])
-    image = renderer.draw(_Scene(8, 6, 1.0, 1.0, "gouraud", (0.0, 0.0, 1.0), polys, depths,
-                                 colors))
+    image = renderer.draw(Scene(8, 6, 1.0, 1.0, "gouraud", (0.0, 0.0, 1.0), polys, depths,
+                                colors))
     if image.shape != (6, 8, 3) or image[3, 4].tolist() != [0, 255, 0]:
         raise RuntimeError(f"self-test drew {image[3, 4].tolist()} where [0, 255, 0] belongs")
 
@@ -262,7 +262,7 @@ def gl_available() -> tuple:
     return ok, reason
 
 
-def _draw(scene: _Scene) -> np.ndarray:
+def _draw(scene: Scene) -> np.ndarray:
     """Draw a prepared scene; RuntimeError (why) when GL is unavailable."""
     ok, reason = gl_available()         # looked up at each call: tests monkeypatch it
     if not ok:
@@ -272,7 +272,7 @@ def _draw(scene: _Scene) -> np.ndarray:
 
 def render_face_gl(face, frames=None, *, frame: int = 0, size: Sequence[int] = (480, 560),
                    view: Union[str, tuple] = "front", colors: Optional[Mapping] = None,
-                   shading: str = "gouraud", background: Sequence[float] = _BACKGROUND,
+                   shading: str = "gouraud", background: Sequence[float] = BACKGROUND,
                    light: Sequence[float] = (-0.45, 0.55, 0.70), fit=None, cull: bool = True,
                    hide: Sequence[str] = ()) -> np.ndarray:
     """:func:`~mpeg4fba.render.preview.render_face` drawn with OpenGL: the same
@@ -285,6 +285,6 @@ def render_face_gl(face, frames=None, *, frame: int = 0, size: Sequence[int] = (
     >>> (render_face_gl(FaceModel([tri]), size=(40, 30)).shape if ok else (30, 40, 3))
     (30, 40, 3)
     """
-    scene = _scene(face, frames, frame, size, view, colors, shading, background, light,
-                   fit, cull, hide)
+    scene = build_scene(face, frames, frame, size, view, colors, shading, background, light,
+                        fit, cull, hide)
     return _draw(scene)

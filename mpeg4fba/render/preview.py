@@ -5,7 +5,7 @@ No window: the meshes of a :class:`~mpeg4fba.fba.face.FaceModel` (neutral, posed
 frame of a playback) are put through their transform chain, seen through a perspective
 camera and shaded with Lambert's law (a key and a fill light): per vertex and
 interpolated across the triangle ("gouraud", the default: smooth), or per triangle
-("flat").  That scene is built once (``_scene``) and drawn by one of two backends:
+("flat").  That scene is built once (``build_scene``) and drawn by one of two backends:
 
 * "matplotlib": triangles sorted back to front (painter's algorithm) and drawn as
   collections on Agg; works wherever matplotlib does;
@@ -61,7 +61,7 @@ __all__ = ["render_face", "render_grid", "save_png", "save_image", "IMAGE_SUFFIX
 #: Camera yaw (degrees, about the face's up axis) and pitch of each named view.
 VIEWS = {"front": (0.0, 0.0), "three-quarter": (35.0, 8.0), "profile": (90.0, 0.0)}
 
-_BACKGROUND = (0.93, 0.94, 0.96)
+BACKGROUND = (0.93, 0.94, 0.96)
 _FILL = np.array([0.35, -0.45, 0.82]) / np.linalg.norm([0.35, -0.45, 0.82])   # from below right
 
 
@@ -112,7 +112,7 @@ last_fallback: Optional[str] = None
 
 def render_face(face, frames=None, *, frame: int = 0, size: Sequence[int] = (480, 560),
                 view: Union[str, tuple] = "front", colors: Optional[Mapping] = None,
-                shading: str = "gouraud", background: Sequence[float] = _BACKGROUND,
+                shading: str = "gouraud", background: Sequence[float] = BACKGROUND,
                 light: Sequence[float] = (-0.45, 0.55, 0.70), fit=None, cull: bool = True,
                 hide: Sequence[str] = (), backend: str = "auto") -> np.ndarray:
     """Render a face to an RGB image ``[h, w, 3]`` (uint8).
@@ -138,8 +138,8 @@ def render_face(face, frames=None, *, frame: int = 0, size: Sequence[int] = (480
     :data:`last_backend` tells which one ran.
     """
     global last_backend, last_fallback
-    scene = _scene(face, frames, frame, size, view, colors, shading, background, light,
-                   fit, cull, hide)
+    scene = build_scene(face, frames, frame, size, view, colors, shading, background, light,
+                        fit, cull, hide)
     chosen, why = _choose_backend(backend)
     if chosen == "gl":
         from . import gl
@@ -184,7 +184,7 @@ def _choose_backend(backend: str) -> tuple:
 
 
 @dataclass
-class _Scene:
+class Scene:
     """A face made ready to draw, the same for every backend: the triangles to draw
     (culled, hidden meshes left out) as projected corners ``polys`` [m, 3, 2] on the
     image plane (+y up; the image spans ``-half_w..half_w`` by ``-half_h..half_h``),
@@ -255,10 +255,10 @@ def project_points(face, points, *, size: Sequence[int] = (480, 560),
     return np.stack([col, row, depth], axis=1)
 
 
-def _scene(face, frames, frame: int, size: Sequence[int], view, colors: Optional[Mapping],
-           shading: str, background: Sequence[float], light: Sequence[float], fit,
-           cull: bool, hide: Sequence[str]) -> _Scene:
-    """Check the arguments of :func:`render_face` and build its :class:`_Scene`: the
+def build_scene(face, frames, frame: int, size: Sequence[int], view,
+                colors: Optional[Mapping], shading: str, background: Sequence[float],
+                light: Sequence[float], fit, cull: bool, hide: Sequence[str]) -> Scene:
+    """Check the arguments of :func:`render_face` and build its :class:`Scene`: the
     camera, the framing, the culling and the lighting (per corner) shared by both
     renderers."""
     w, h, R, centre, dist, half_w, half_h = _framing(face, size, view, fit)
@@ -312,13 +312,13 @@ def _scene(face, frames, frame: int, size: Sequence[int], view, colors: Optional
         polys.append(p[keep])
         shades.append(corner[keep])
         depths.append(depth[tri[keep]])
-    return _Scene(w, h, float(half_w), float(half_h), shading, tuple(background),
+    return Scene(w, h, float(half_w), float(half_h), shading, tuple(background),
                   np.concatenate(polys) if polys else np.zeros((0, 3, 2)),
                   np.concatenate(depths) if depths else np.zeros((0, 3)),
                   np.concatenate(shades) if shades else np.zeros((0, 3, 3)))
 
 
-def _draw_agg(scene: _Scene) -> np.ndarray:
+def _draw_agg(scene: Scene) -> np.ndarray:
     """The software renderer: the scene's triangles sorted back to front (painter's
     algorithm) and drawn on matplotlib's Agg canvas."""
     from matplotlib.backends.backend_agg import FigureCanvasAgg

@@ -100,8 +100,8 @@ def main(argv=None) -> int:
         print(f"  one-time set-up: {why}")
 
     def scene():
-        return preview._scene(face, None, 0, size, "front", None, "gouraud",
-                              preview._BACKGROUND, (-0.45, 0.55, 0.70), None, True, ())
+        return preview.build_scene(face, None, 0, size, "front", None, "gouraud",
+                                   preview.BACKGROUND, (-0.45, 0.55, 0.70), None, True, ())
     scene_s, sc = best_of(scene, args.reps)
     print(f"shared scene set-up (numpy): {scene_s:.4f} s, {len(sc.polys):,} triangles "
           "drawn after culling")

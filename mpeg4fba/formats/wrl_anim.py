@@ -54,7 +54,7 @@ from ..fba.stream import FapStream
 from ..vrml.scene import Node, Route, Scene
 from ..vrml.writer import dump
 from .gltf import driven_transforms, quaternions
-from .wrl_face import _Namer, scene_from_face
+from .wrl_face import DefNamer, scene_from_face
 
 __all__ = ["animated_scene", "write_animated_wrl", "CLOCK_NAME"]
 
@@ -81,8 +81,8 @@ def _axis_angles(R: np.ndarray) -> np.ndarray:
 def _face_nodes(face: FaceModel, scene: Scene) -> tuple:
     """(mesh name -> IndexedFaceSet node, transform name -> Transform node) of a scene
     made by ``scene_from_face(face)``: its DEF names are claimed transforms first, then
-    meshes, by one :class:`_Namer`, so the same claims give them back."""
-    names = _Namer()
+    meshes, by one :class:`DefNamer`, so the same claims give them back."""
+    names = DefNamer()
     tnames = {n: names.claim(n, "transform") for n in face.transforms}
     mnames = {n: names.claim(n, "mesh") for n in face.meshes}
     defs = scene.defs

@@ -567,7 +567,7 @@ def _sanitize(name: str) -> str:
     return s if is_name(s) else "_"
 
 
-class _Namer:
+class DefNamer:
     """Unique valid DEF names, the wanted ones first come first served."""
 
     def __init__(self):
@@ -651,7 +651,7 @@ def scene_from_face(face: FaceModel, *, protos: bool = True) -> Scene:
     Transform the face does not have, non-integral interval borders).
     """
     _check_tree(face)
-    names = _Namer()
+    names = DefNamer()
     tnames = {n: names.claim(n, "transform") for n in face.transforms}
     mnames = {n: names.claim(n, "mesh") for n in face.meshes}
     initial = dict(getattr(face, "initial_faps", None) or {})

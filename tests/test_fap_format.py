@@ -329,7 +329,7 @@ def streams(draw) -> FapStream:
     return FapStream(values, mask, fps, visemes, expressions, name=name)
 
 
-@settings(max_examples=150, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@settings(max_examples=80, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(streams())
 def test_random_streams_round_trip_exactly(stream):
     text = dumps_fap(stream)

@@ -1,7 +1,7 @@
 """The fast fuzzing budget of issue 21: a few hundred mutated inputs per reader, from
 fixed seeds, each ending in a result or the reader's own located error.
 
-``MPEG4FBA_FUZZ_N`` sets the inputs per reader (default 200); the long run with
+``MPEG4FBA_FUZZ_N`` sets the inputs per reader (default 120); the long run with
 process isolation, CPU and memory caps is ``benchmarks/fuzz_readers.py``.  Inputs
 that once failed, minimised, live in ``tests/fuzz/regressions/<reader>/`` and are
 read again here.
@@ -16,7 +16,7 @@ import pytest
 from _guards import alarm
 from fuzz import harness as h
 
-N = int(os.environ.get("MPEG4FBA_FUZZ_N", "200"))
+N = int(os.environ.get("MPEG4FBA_FUZZ_N", "120"))
 REGRESSIONS = Path(__file__).parent / "regressions"
 
 

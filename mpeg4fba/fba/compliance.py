@@ -8,9 +8,9 @@ text of a file (node types, where a node is) live with the file readers, in
 The numeric check is one no other tool has: each low-level FAP of the FAT is played
 alone at a test value, and the feature point it moves (the vertex it is tied to, else
 the vertex nearest to it; of a closed slit's two copies of that place, the one the FAP
-moves) must move along the FAP's direction by value x FAPU / 1024 (a rotation FAP must turn its
-Transform by value x 1e-5 rad).  The ratio of what it does to what the standard says is
-reported per FAP; more than 5% off is flagged.
+moves) must move along the FAP's direction by value x FAPU / 1024 (a rotation FAP must
+turn its Transform by value x 1e-5 rad).  The ratio of what it does to what the
+standard says is reported per FAP; more than 5% off is flagged.
 
 Example
 -------
@@ -223,10 +223,11 @@ def fap_ratios(face: FaceModel, value: float = TEST_VALUE) -> dict:
     """Per low-level FAP with a table: what it does at ``value`` over what it should.
 
     For a translation FAP: the displacement of its feature point's vertex (see
-    :func:`_translation_ratio`), projected on the FAP's axis, over value x FAPU unit.  For a rotation FAP: the angle
-    its Transform turns by, over value x 1e-5.  A one-sided FAP is played at +value, a
-    FAP whose table only has negative intervals at -value.  None where it can't be
-    measured (no feature point position, no FAPU, scale/curl FAPs).
+    :func:`_translation_ratio`), projected on the FAP's axis, over value x FAPU unit.
+    For a rotation FAP: the angle its Transform turns by, over value x 1e-5.  A
+    one-sided FAP is played at +value, a FAP whose table only has negative intervals at
+    -value.  None where it can't be measured (no feature point position, no FAPU,
+    scale/curl FAPs).
     """
     fapu = face.fapu
     out: dict = {}

@@ -83,12 +83,11 @@ def test_findings_and_reports_read_well():
     assert all(rule.severity in ("error", "warning") for rule in RULES.values())
 
 
-def seam_face(tie=None, gap=0.0, lower=0.0):
+def seam_face(tie=None, lower=0.0):
     """A closed mouth: 2.3 on the seam, where the upper lip's vertex (index 0) and the
-    lower lip's (index 1) are copies of one place (the upper ``gap`` nearer the point,
-    the lower ``lower`` below it)."""
+    lower lip's (index 1) are copies of one place (the lower ``lower`` below it)."""
     pts = dict(POINTS, **{"2.3": (0, -0.5, 1)})
-    verts = np.array([(0, -0.5 + gap, 1), (0, -0.5 - lower, 1), (1, 0, 1), (1, -1, 1)], float)
+    verts = np.array([(0, -0.5, 1), (0, -0.5 - lower, 1), (1, 0, 1), (1, -1, 1)], float)
     skin = FaceMesh("Skin", verts, [[0, 2, 1], [1, 2, 3]])
     raise_lower = FaceDefTable(5, [FaceDefMesh("Skin", [0, 1024], [1], [[0, MNS, 0]])])
     ties = {"2.3": tie} if tie else {}
@@ -98,8 +97,8 @@ def seam_face(tie=None, gap=0.0, lower=0.0):
 def test_a_point_on_a_seam_is_measured_on_the_copy_its_fap_moves():
     # the upper copy is as near (or nearer by a hair): the lower lip's FAP moves the
     # lower copy, and that is what is measured
-    for gap in (0.0, -1e-6):
-        findings, ratios = check_fap_ratios(seam_face(gap=gap))
+    for lower in (0.0, 1e-6):
+        findings, ratios = check_fap_ratios(seam_face(lower=lower))
         assert findings == [] and ratios[5] == pytest.approx(1.0)
     # a vertex tie names the place: tied to the upper copy, the lower copy is measured
     # too; tied to a vertex elsewhere, only that one (which the table moves not at all)

@@ -163,9 +163,9 @@ def detect():
 
 
 @pytest.fixture(scope="module")
-def found(data, detect):
-    """Per case: (identity vertices, truth face, eyes, found points in the head frame or
-    the exception, landmark errors % ES0)."""
+def detections(data, detect):
+    """Per case: (identity vertices, truth face, the placed head, what the detector gave:
+    its points in the placed head's frame, or the exception)."""
     out = []
     for seed, (mesh, eyes), pl in CASES:
         V = ict.identity(data, seed)
@@ -177,9 +177,21 @@ def found(data, detect):
                 warnings.simplefilter("ignore")
                 res = detect.find_feature_points(world)
         except Exception as e:                               # noqa: BLE001 (asserted below)
-            out.append((V, truth, eyes, e, {}))
+            res = e
+        out.append((V, truth, world, res))
+    return out
+
+
+@pytest.fixture(scope="module")
+def found(data, detections):
+    """Per case: (identity vertices, truth face, eyes, found points in the head frame or
+    the exception, landmark errors % ES0)."""
+    from mpeg4fba.fba.featurepoints import FeaturePointSet
+    out = []
+    for (_, (_, eyes), pl), (V, truth, _, res) in zip(CASES, detections):
+        if isinstance(res, Exception):
+            out.append((V, truth, eyes, res, {}))
             continue
-        from mpeg4fba.fba.featurepoints import FeaturePointSet
         head = FeaturePointSet({k: pl.undo(res.points[k]) for k in res.points}, res.points.vertices)
         lm = ict.landmark_points(data, V)
         es = float(np.linalg.norm(truth.points["3.5"] - truth.points["3.6"]))
@@ -241,7 +253,7 @@ def test_found_points_within_the_goal(found, stat):
 
 
 @pytest.fixture(scope="module")
-def cloned(data, found, detect):
+def cloned(data, detections, detect):
     """CASES[3] (ICT-7302, decimated, with eyeballs, lying, x10), cloned from ICT-1 in
     the head frame (eight expressions, scaling off) with the found points (in the
     source's convention, as ``clone`` puts them) and with the landmark points: (auto,
@@ -249,15 +261,13 @@ def cloned(data, found, detect):
     from benchmarks.bench_find_points import SOURCE_SEED, clone_error
     from mpeg4fba.cloning.autopoints import matched_points
     from mpeg4fba.fba.featurepoints import FeaturePointSet
-    V, truth, eyes, head, _ = found[3]
-    assert not isinstance(head, Exception), head
+    V, truth, world, got = detections[3]
+    assert not isinstance(got, Exception), got
+    eyes, pl = CASES[3][1][1], CASES[3][2]
     source = ict.ict_face(data, ict.identity(data, SOURCE_SEED))
     # as `mpeg4fba clone` does: the found points put in the source's convention
-    pl = CASES[3][2]
-    world = ict.placed_face(truth, pl, eyes=eyes)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        got = detect.find_feature_points(world)
         on_source = detect.find_feature_points(ict.placed_face(source, None))
     m = matched_points(world, got, source, source_found=on_source)
     auto = FeaturePointSet({k: pl.undo(m[k]) for k in m})
@@ -283,12 +293,10 @@ def test_cloning_with_found_points_within_the_goal(cloned, which):
     assert _ratio(cloned, which) <= GOAL[which], cloned
 
 
-def test_a_head_without_eyeballs_says_where_its_pupils_are_or_that_they_are_missing(data, detect):
-    V = ict.identity(data, 7303)
-    world = ict.placed_face(ict.ict_face(data, V), CASES[2][2], eyes=False)
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        res = detect.find_feature_points(world)
+def test_a_head_without_eyeballs_says_where_its_pupils_are_or_that_they_are_missing(detections):
+    assert not CASES[2][1][1]                                # ICT-7302, full, no eyeballs
+    res = detections[2][3]
+    assert not isinstance(res, Exception), res
     for fp in ("3.5", "3.6"):
         assert fp in res.points or (fp in res.missing and fp in res.reasons), fp
 

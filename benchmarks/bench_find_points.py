@@ -56,7 +56,8 @@ Noise: the landmark points of the first ``--noise`` targets with eyeballs plus G
 sigma 0.5, 1 and 2 mm per axis (ICT is in cm at life size), each point then projected back
 onto the mesh it lies on (7.1, inside the neck, and the pupils of a head without
 eyeballs stay where the noise puts them), ``--draws`` draws each, cloned as given and
-after ``snap_points`` (its crisp points moved onto the geometry); the ratio of max and
+after ``snap_points`` (its crisp points moved onto the geometry, the inner lips' across
+the slit in the source's convention, as ``clone --snap`` does); the ratio of max and
 mean to the clean landmark points'.
 
 ``--json PATH`` writes every case's figures.  Until ``mpeg4fba.cloning.detect`` exists
@@ -146,12 +147,12 @@ def load_detector() -> Detector:
     try:
         from mpeg4fba.cloning import detect
     except ImportError:
-        def snap(face, points, ids=()):
+        def snap(face, points, ids=(), **_):
             return points, {}
         return Detector("STAND-IN (landmark points given back; mpeg4fba.cloning.detect is "
                         "not there yet)", None, snap, tuple(LANDMARK_IDS), False)
     return Detector("mpeg4fba.cloning.detect.find_feature_points", detect.find_feature_points,
-                    detect.snap_points, tuple(detect.CRISP_POINTS), True)
+                    detect.snap_points, tuple(detect.SNAP_POINTS), True)
 
 
 # -- cases ----------------------------------------------------------------------------------------
@@ -725,7 +726,10 @@ def main(argv=None) -> int:
                             use = pts
                             if snap:
                                 target = ict.placed_face(truth, None, eyes=eyes, name=truth.name)
-                                use, _ = det.snap(target, pts, ids=det.crisp)
+                                # as `clone --snap` does: in the source's convention
+                                src, src_found = SOURCE_FOUND or (None, None)
+                                use, _ = det.snap(target, pts, ids=det.crisp, source=src,
+                                                  source_found=src_found)
                             r = clone_error(data, source, truth, use, eyes)
                             r.update({"mm": mm, "snap": snap, "draw": d, "name": name,
                                       "clean_mean": clean["mean"], "clean_max": clean["max"]})

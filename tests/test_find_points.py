@@ -15,7 +15,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from mpeg4fba.cloning import (CRISP_POINTS, FaceNotFoundError, FoundPoints,
+from mpeg4fba.cloning import (LIP_EDGE_POINTS, SNAP_POINTS, FaceNotFoundError, FoundPoints,
                               find_feature_points, snap_points)
 from mpeg4fba.cloning.detect import (_anchors, _convention_points, _menton, _profile,
                                      _profile_points)
@@ -194,15 +194,56 @@ def test_snap_points_moves_noisy_crisp_points_back():
     found = find_feature_points(face)
     es = float(np.linalg.norm(head.points["3.5"] - head.points["3.6"]))
     rng = np.random.default_rng(0)
-    noisy = {k: found.points[k] + (rng.normal(size=3) * 0.05 * es if k in CRISP_POINTS else 0)
+    noisy = {k: found.points[k] + (rng.normal(size=3) * 0.05 * es if k in SNAP_POINTS else 0)
              for k in found.points}
     snapped, moved = snap_points(face, FeaturePointSet(noisy))
-    assert set(moved) == set(CRISP_POINTS) & set(noisy)
+    assert set(moved) == set(SNAP_POINTS) & set(noisy)
     for k in moved:
-        assert np.linalg.norm(snapped[k] - found.points[k]) < 1e-9
-        assert moved[k] == pytest.approx(np.linalg.norm(noisy[k] - found.points[k]))
-    untouched = next(k for k in noisy if k not in CRISP_POINTS)
+        assert moved[k] == pytest.approx(np.linalg.norm(noisy[k] - snapped[k]))
+        if k in LIP_EDGE_POINTS:          # back across the slit, not along it
+            assert np.linalg.norm(snapped[k] - found.points[k]) < np.linalg.norm(noisy[k] - found.points[k]), k
+        else:
+            assert np.linalg.norm(snapped[k] - found.points[k]) < 1e-9
+    untouched = next(k for k in noisy if k not in SNAP_POINTS)
     assert np.array_equal(snapped[untouched], noisy[untouched])
+
+
+def test_snapping_across_the_slit_keeps_the_place_along_the_lip_and_the_sources_habit():
+    """An inner lip point given off the slit comes back onto its lip's edge where it was
+    along the lip; with a source whose own point lies a little above its lip's edge, the
+    target's lands as far above its own."""
+    head = reference_head(resolution=1.0)
+    found = find_feature_points(head)
+    es = float(np.linalg.norm(head.points["3.5"] - head.points["3.6"]))
+    up, right = found.up, np.cross(found.up, found.forward)
+    given = dict(head.points.items())
+    given["2.6"] = head.points["2.6"] + 0.03 * es * up + 0.02 * es * right     # 2 mm up, 1.3 along
+    snapped, moved = snap_points(head, FeaturePointSet(given), ids=["2.6"], found=found)
+    edge = found.curves["upper lip"]
+    off_edge = np.min(np.linalg.norm(edge - snapped["2.6"], axis=1))
+    assert off_edge < 0.01 * es
+    along = (snapped["2.6"] - head.points["2.6"]) @ right
+    assert along == pytest.approx(0.02 * es, abs=0.006 * es)
+    assert snapped.vertices["2.6"][0] in head.meshes
+    # a source whose 2.6 sits on its upper lip 1-3 % ES above the edge: given the same
+    # head, a 2.6 pushed 2 mm across the slit comes back to the source's very vertex
+    V = head.world_vertices(snapped.vertices["2.6"][0])
+    near = np.flatnonzero(np.linalg.norm(V - head.points["2.6"], axis=1) < 0.06 * es)
+    to_upper = np.array([np.min(np.linalg.norm(edge - v, axis=1)) for v in V[near]])
+    to_lower = np.array([np.min(np.linalg.norm(found.curves["lower lip"] - v, axis=1))
+                         for v in V[near]])
+    above = near[(to_upper > 0.01 * es) & (to_upper < 0.03 * es) & (to_upper < to_lower)
+                 & ((V[near] - head.points["2.6"]) @ up > 0)]
+    q = V[above[np.argmin(np.abs((V[above] - head.points["2.6"]) @ right))]]
+    source = reference_head(resolution=1.0)
+    source.points = FeaturePointSet({**dict(source.points.items()), "2.6": q})
+    for push in (0.03 * up, -0.03 * up, 0.02 * found.forward):
+        given["2.6"] = q + push * es
+        habit, _ = snap_points(head, FeaturePointSet(given), ids=["2.6"], found=found,
+                               source=source, source_found=found)
+        assert np.linalg.norm(habit["2.6"] - q) < 0.005 * es, push
+        plain, _ = snap_points(head, FeaturePointSet(given), ids=["2.6"], found=found)
+        assert np.linalg.norm(plain["2.6"] - q) > 0.01 * es     # onto the edge itself
 
 
 # -- non-faces --------------------------------------------------------------------------------

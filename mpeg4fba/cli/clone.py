@@ -52,7 +52,7 @@ def _say_points(report, target: str, where: str) -> None:
 
     if report.snapped:
         k, d = max(report.snapped.items(), key=lambda kv: kv[1])
-        click.echo(f"snapped {len(report.snapped)} crisp points onto the target's geometry "
+        click.echo(f"snapped {len(report.snapped)} points onto the target's geometry "
                    f"(farthest {k}, moved {d:.3g} model units)")
     if report.added:
         worst, conf = report.lowest()
@@ -85,7 +85,9 @@ def _say_points(report, target: str, where: str) -> None:
 @click.option("--lenient", is_flag=True, help="Read VRML leniently (unknown nodes kept, with a warning).")
 @click.option("--snap", is_flag=True,
               help="Move the crisp points of --target-points (lip and eye corners, mid-lip, nose "
-                   "tip, chin, ...) onto the target's geometry before cloning.")
+                   "tip, chin, ...) onto the target's geometry before cloning, and the inner "
+                   "lips' points across the mouth's slit onto their lip's edge, as the "
+                   "source's lie.")
 @click.option("--no-check", is_flag=True, help="Skip validating the result.")
 def clone_command(faces: tuple, output: str, source_points: Optional[str], target_points: Optional[str],
                   support: float, no_scale: bool, positions: str, triangulation: str, method: str,

@@ -72,7 +72,8 @@ def _default_output(head: str, edit: bool) -> str:
 @click.option("--points", "given", metavar="FILE",
               help="Start from these points (.json or Xface .fdp) instead of finding them.")
 @click.option("--snap", is_flag=True, help="With --points: move the crisp points (lip and eye corners, "
-                                           "mid-lip, nose tip, chin, ...) onto the geometry.")
+                                           "mid-lip, nose tip, chin, ...) onto the geometry, and the "
+                                           "inner lips' points across the slit onto their lip's edge.")
 @click.option("--preview", metavar="PNG", help="Where to draw the points (default: beside the JSON).")
 @click.option("--no-preview", is_flag=True, help="Draw no picture.")
 @click.option("--lenient", is_flag=True, help="Read VRML leniently (unknown nodes kept, with a warning).")
@@ -120,7 +121,7 @@ def _points(head: str, output: str, edit: bool, given: Optional[str], snap: bool
         if snap:
             points, moved = snap_points(face, points)
             far = max(moved.items(), key=lambda kv: kv[1], default=None)
-            click.echo(f"snapped {len(moved)} crisp points of {os.path.basename(given)} onto the "
+            click.echo(f"snapped {len(moved)} points of {os.path.basename(given)} onto the "
                        f"geometry" + (f" (farthest {far[0]}, moved {far[1]:.3g} model units)" if far else ""))
         wanted = required_points(base=REQUIRED_POINTS)
         missing = tuple(points.missing(wanted))

@@ -31,8 +31,8 @@ from __future__ import annotations
 from .alignment import REQUIRED_POINTS, FaceSpace, align, alignment_triangles
 from .checks import PlacementError, check_placement
 from .autopoints import PointReport, complete_points
-from .detect import (CRISP_POINTS, FaceNotFoundError, FoundPoints, find_feature_points,
-                     snap_points)
+from .detect import (CRISP_POINTS, LIP_EDGE_POINTS, SNAP_POINTS, FaceNotFoundError,
+                     FoundPoints, find_feature_points, snap_points)
 from .fmc import CloneWarning, FacialMotionCloner, PreparedSource, clone, required_points_missing
 from .job import CloneJob
 from .local_frames import (LocalFrameCloner, LocalFrameWarning, TopologyError,
@@ -52,4 +52,4 @@ __all__ = ["clone", "FacialMotionCloner", "PreparedSource", "CloneJob", "LocalFr
            "Projection", "choose_axis", "cylindrical_projection", "MOUTH_ANGLE",
            "PlacementError", "check_placement", "separate_parts", "carry_part_points",
            "find_feature_points", "FoundPoints", "FaceNotFoundError", "snap_points",
-           "CRISP_POINTS", "complete_points", "PointReport"]
+           "CRISP_POINTS", "LIP_EDGE_POINTS", "SNAP_POINTS", "complete_points", "PointReport"]

@@ -31,7 +31,7 @@ import numpy as np
 from ..fba.face import FaceModel
 from ..fba.featurepoints import FeaturePointSet, point_order
 from .alignment import REQUIRED_POINTS
-from .detect import (PART_OF, CRISP_POINTS, FaceNotFoundError, FoundPoints,
+from .detect import (PART_OF, SNAP_POINTS, FaceNotFoundError, FoundPoints,
                      find_feature_points, snap_points)
 from .surface import onto_same_sheet
 
@@ -59,21 +59,29 @@ class PointReport:
 
 
 def complete_points(face: FaceModel, *, required: Iterable[str] = REQUIRED_POINTS,
-                    snap: bool = False) -> PointReport:
+                    snap: bool = False, source: Optional[FaceModel] = None,
+                    source_found=None) -> PointReport:
     """Give ``face`` (in place) the points it lacks of ``required``, found on its
     geometry; a face with no points at all gets every point found.  Given points stay
-    as given, unless ``snap`` moves the crisp ones onto the geometry.  Raises
+    as given, unless ``snap`` moves them onto the geometry
+    (:func:`~mpeg4fba.cloning.detect.snap_points`: the crisp ones, and the inner lips'
+    across the slit, in the convention of ``source``, the face the motion comes from,
+    when given; ``source_found``: its found points, or a
+    :class:`~mpeg4fba.cloning.detect.FaceNotFoundError`).  Raises
     :class:`~mpeg4fba.cloning.detect.FaceNotFoundError` when points are needed and the
     mesh does not look like a face."""
     given = face.points
     missing = given.missing(required)
-    crisp = [k for k in CRISP_POINTS if k in given] if snap else []
+    crisp = [k for k in SNAP_POINTS if k in given] if snap else []
     if not missing and not crisp:
         return PointReport(kept=tuple(given))
     found = find_feature_points(face)          # once, for the snapping and the filling
     snapped: dict = {}
     if crisp:
-        given, moved = snap_points(face, given, ids=crisp, found=found)
+        if isinstance(source_found, FaceNotFoundError):
+            source = source_found = None
+        given, moved = snap_points(face, given, ids=crisp, found=found, source=source,
+                                   source_found=source_found)
         snapped = {k: float(d) for k, d in moved.items()}
     take = set(found.points) if not len(given) else set(missing) & set(found.points)
     positions = {k: given[k] for k in given}

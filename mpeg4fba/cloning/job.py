@@ -101,9 +101,10 @@ class CloneJob:
         into the source's convention (the mapping needs both faces' points to agree more
         than it needs them to be anyone's "right")."""
         target = self.target
-        self.points = complete_points(target, snap=self.snap)
+        found = self.source.found if isinstance(self.source, PreparedSource) else None
+        self.points = complete_points(target, snap=self.snap, source=self.source_face,
+                                      source_found=found)
         if self.points.added and not self.points.kept:
-            found = self.source.found if isinstance(self.source, PreparedSource) else None
             target.points = matched_points(target, self.points.found, self.source_face,
                                            source_found=found)
 

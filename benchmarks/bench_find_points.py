@@ -567,6 +567,12 @@ def report_cloning(pairs: list) -> dict:
     return {"ratio_mean": sm, "ratio_max": sx, "raised": len(raised)}
 
 
+def snap_options(mm: float) -> tuple:
+    """The clonings of a noise level: as given and snapped; the clean points (0 mm)
+    only snapped."""
+    return (False, True) if mm else (True,)
+
+
 def report_noise(rows: list) -> dict:
     print("\n### Given points plus noise (sigma per axis, then back onto the surface): cloning "
           "against the clean landmark points\n")
@@ -575,7 +581,7 @@ def report_noise(rows: list) -> dict:
     print("|---|---|---:|---:|---:|---:|")
     out = {}
     for mm in (0.0,) + NOISE_MM:
-        for snap in ((False, True) if mm else (True,)):
+        for snap in snap_options(mm):
             r = [x for x in rows if x["mm"] == mm and x["snap"] == snap and "max" in x]
             bad = [x for x in rows if x["mm"] == mm and x["snap"] == snap and "raised" in x]
             rm = [x["mean"] / x["clean_mean"] for x in r]
@@ -721,19 +727,23 @@ def main(argv=None) -> int:
             clean = pairs[-2]["landmark"]
             if i < n_noise and "max" in clean:
                 rng = np.random.default_rng([ident.seed, 2])
+                # the target as `clone --snap` sees it, its points found once for every draw
+                target = ict.placed_face(truth, None, eyes=eyes, name=truth.name)
+                with warnings.catch_warnings():
+                    warnings.simplefilter("ignore")
+                    found = det.find(target) if det.real else None
+                src, src_found = SOURCE_FOUND or (None, None)
                 # 0 mm: the clean points snapped, what snapping alone costs (no draw taken
                 # from rng, so the noisy draws are those of earlier runs)
                 for mm in (0.0,) + NOISE_MM:
                     for d in range(args.draws if mm else 1):
                         pts = noisy(ident.given, truth, eyes, mm / 10.0, rng) if mm else ident.given
-                        for snap in ((False, True) if mm else (True,)):
+                        for snap in snap_options(mm):
                             use = pts
                             if snap:
-                                target = ict.placed_face(truth, None, eyes=eyes, name=truth.name)
                                 # as `clone --snap` does: in the source's convention
-                                src, src_found = SOURCE_FOUND or (None, None)
-                                use, _ = det.snap(target, pts, ids=det.crisp, source=src,
-                                                  source_found=src_found)
+                                use, _ = det.snap(target, pts, ids=det.crisp, found=found,
+                                                  source=src, source_found=src_found)
                             r = clone_error(data, source, truth, use, eyes)
                             r.update({"mm": mm, "snap": snap, "draw": d, "name": name,
                                       "clean_mean": clean["mean"], "clean_max": clean["max"]})

@@ -801,12 +801,15 @@ def _groove(D: np.ndarray, i: int, j: int, step: int, reach: int = 3,
             depth: float = 0.01, slack: int = 3) -> list:
     """The cells (i, j) of the groove of the depth map ``D`` (front-view z, -inf where
     empty) followed from (i, j) along x (``step`` = +-1): at each column the deepest cell
-    within two cells of the last one's height (an empty cell is deepest: an opening),
-    while it lies ``depth`` (0.01 ES, 0.6 mm) or more behind the mean of the cells
-    ``reach`` rows above and below it (a groove, not the smooth skin beyond its end).
-    Up to ``slack`` weaker columns in a row are crossed (a decimated mesh's facets make a
-    shallow groove flicker); the groove ends at its last strong cell."""
-    out, weak = [], []
+    within two cells of the last one's height (an empty cell is deepest: an opening).  A
+    column is strong where that cell lies ``depth`` (0.01 ES, 0.6 mm) or more behind the
+    mean of the cells ``reach`` rows above and below it, faint where less than half that
+    (the smooth skin beyond the groove's end).  The groove is followed through columns
+    between the two (a lip line that runs shallow for a stretch: a smooth model's lips
+    meet 0.009-0.010 ES deep near the mid line) and across up to ``slack`` faint ones in a
+    row (a decimated mesh's facets make a shallow groove flicker); it ends at its last
+    strong cell, and is [] unless half its columns or more are strong."""
+    out, pending, faint, strong = [], [], 0, 0
     ny = D.shape[1]
     for _ in range(D.shape[0]):
         i += step
@@ -817,17 +820,24 @@ def _groove(D: np.ndarray, i: int, j: int, step: int, reach: int = 3,
             break
         jb = int(js[np.argmin(D[i, js])])
         z, up, dn = D[i, jb], D[i, jb + reach], D[i, jb - reach]
-        if np.isfinite(z) and (not (np.isfinite(up) and np.isfinite(dn))
-                               or 0.5 * (up + dn) - z < depth):
-            weak.append((i, jb))
-            if len(weak) > slack:
-                break
+        if not np.isfinite(z):
+            c = np.inf
+        elif np.isfinite(up) and np.isfinite(dn):
+            c = 0.5 * (up + dn) - z
         else:
-            out.extend(weak)
-            weak = []
+            c = -np.inf
+        if c >= depth:
+            out.extend(pending)
             out.append((i, jb))
+            pending, faint = [], 0
+            strong += 1
+        else:
+            pending.append((i, jb))
+            faint = faint + 1 if c < 0.5 * depth else 0
+            if faint > slack:
+                break
         j = jb
-    return out
+    return out if 2 * strong >= len(out) else []
 
 
 def _mouth_points(Vt: np.ndarray, T: np.ndarray, stomion: np.ndarray) -> dict:
@@ -1561,12 +1571,14 @@ def _parts(pieces: _Pieces, s, R, t, X, tpl: _Template, pos, tie, reasons) -> se
         found.add("eye")
     # teeth and tongue: each remaining piece goes to the template part (moved with the
     # registration) it lies closest to, when it lies near it (median within TEETH_REACH
-    # of the teeth, 0.06 ES of the tongue) and is no bigger than it (a mouth cavity or gums-and-palate piece is bigger); a
+    # of the teeth, 0.06 ES of the tongue) and is no bigger than it (a mouth cavity or
+    # gums-and-palate piece is bigger); a
     # tooth to the row above or below the bite where it stands (_teeth_row)
     names = ("UpperTeeth", "LowerTeeth", "Tongue")
     moved_parts = {n: moved(tpl.parts[n][0]) for n in names}
     trees = {n: cKDTree(v) for n, v in moved_parts.items()}
     size = {n: float(np.ptp(v, axis=0).max()) for n, v in moved_parts.items()}
+    depth = {n: float(np.ptp(v[:, 2])) for n, v in moved_parts.items()}
     take = {n: [] for n in names}
     up_v, low_v = moved_parts["UpperTeeth"], moved_parts["LowerTeeth"]
     for c in members:
@@ -1574,7 +1586,10 @@ def _parts(pieces: _Pieces, s, R, t, X, tpl: _Template, pos, tie, reasons) -> se
             continue
         d = {n: float(np.median(trees[n].query(Vt[members[c]])[0])) for n in names}
         n = min(d, key=d.get)
-        if d[n] < (0.06 if n == "Tongue" else TEETH_REACH) and ext[c] <= 1.3 * size[n]:
+        # (no deeper than it either: a mouth's lining can be as wide as a row of teeth
+        # stretched by the registration, but is twice as deep)
+        if d[n] < (0.06 if n == "Tongue" else TEETH_REACH) and ext[c] <= 1.3 * size[n] \
+                and np.ptp(Vt[members[c], 2]) <= 1.3 * depth[n]:
             if n != "Tongue":
                 n = _teeth_row(cent[c], up_v, low_v) or n
             take[n].append(c)

@@ -251,6 +251,9 @@ def run_case(det: Detector, ident: Identity, variant: int) -> tuple:
         src, src_found = SOURCE_FOUND
         matched = matched_points(world, found, src, source_found=src_found)
         res["matched"] = {k: [round(float(x), 6) for x in pl.undo(matched[k])] for k in matched}
+        # (the vertices they are tied to, as `clone` has them: the cloner holds a point's
+        # vertex, and lets its motion unfiltered)
+        res["matched_ties"] = {k: [m, int(v)] for k, (m, v) in matched.vertices.items()}
     head = FeaturePointSet({k: pl.undo(P[k]) for k in P}, P.vertices)
     res["found"] = list(head)
     # against the landmark truth
@@ -711,7 +714,8 @@ def main(argv=None) -> int:
                 else:
                     use = heads[v]
                     if "matched" in case:
-                        use = FeaturePointSet({k: np.asarray(x) for k, x in case["matched"].items()})
+                        use = FeaturePointSet({k: np.asarray(x) for k, x in case["matched"].items()},
+                                              {k: tuple(t) for k, t in case["matched_ties"].items()})
                     auto = clone_error(data, source, truth, use, eyes)
                 picked = clone_error(data, source, truth, truth.points, eyes) if eyes else {}
                 pairs.append({"name": name, "eyes": eyes, "auto": auto, "landmark": clean,

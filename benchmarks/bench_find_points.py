@@ -252,7 +252,7 @@ def run_case(det: Detector, ident: Identity, variant: int) -> tuple:
         matched = matched_points(world, found, src, source_found=src_found)
         res["matched"] = {k: [round(float(x), 6) for x in pl.undo(matched[k])] for k in matched}
         # (the vertices they are tied to, as `clone` has them: the cloner holds a point's
-        # vertex, and lets its motion unfiltered)
+        # vertex and gives it its motion unfiltered)
         res["matched_ties"] = {k: [m, int(v)] for k, (m, v) in matched.vertices.items()}
     head = FeaturePointSet({k: pl.undo(P[k]) for k in P}, P.vertices)
     res["found"] = list(head)

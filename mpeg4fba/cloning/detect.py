@@ -1572,8 +1572,8 @@ def _parts(pieces: _Pieces, s, R, t, X, tpl: _Template, pos, tie, reasons) -> se
     # teeth and tongue: each remaining piece goes to the template part (moved with the
     # registration) it lies closest to, when it lies near it (median within TEETH_REACH
     # of the teeth, 0.06 ES of the tongue) and is no bigger than it (a mouth cavity or
-    # gums-and-palate piece is bigger); a
-    # tooth to the row above or below the bite where it stands (_teeth_row)
+    # gums-and-palate piece is bigger); a tooth to the row above or below the bite where
+    # it stands (_teeth_row)
     names = ("UpperTeeth", "LowerTeeth", "Tongue")
     moved_parts = {n: moved(tpl.parts[n][0]) for n in names}
     trees = {n: cKDTree(v) for n, v in moved_parts.items()}

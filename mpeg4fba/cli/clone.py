@@ -23,7 +23,7 @@ Example
 """
 from __future__ import annotations
 
-from typing import Optional
+from typing import Optional, Sequence
 
 import click
 
@@ -31,6 +31,23 @@ from . import main, warnings_to_stderr
 from .common import check_output, run_steps
 
 __all__ = ["clone_command", "found_points_path"]
+
+
+def check_lines(findings: Sequence, output: str, shown: int = 10) -> list:
+    """The lines ``clone`` prints for its check of the result: the counts, the first
+    ``shown`` errors and warnings, and how many more there are.
+
+    >>> from mpeg4fba.fba.compliance import Finding
+    >>> check_lines([Finding("FBA014", f"FAP {n}: off") for n in (3, 4, 5)], "out.wrl", shown=2)[-1]
+    '  ... and 1 more (all of them: mpeg4fba validate out.wrl)'
+    """
+    errors = [f for f in findings if f.severity == "error"]
+    worst = [f for f in findings if f.severity != "info"]
+    lines = [f"check: {len(errors)} errors, {len(worst) - len(errors)} warnings"]
+    lines += [f"  {f}" for f in worst[:shown]]
+    if len(worst) > shown:
+        lines.append(f"  ... and {len(worst) - shown} more (all of them: mpeg4fba validate {output})")
+    return lines
 
 
 def found_points_path(output: str) -> str:
@@ -148,11 +165,8 @@ def clone_command(faces: tuple, output: str, source_points: Optional[str], targe
                f"{len(fat.visemes)} visemes, {len(fat.expressions)} expressions "
                f"(mapping {times['mapping the faces']:.2f} s, tables {times['cloning the tables']:.2f} s); wrote {output}")
     if not no_check:
-        report = job.report
-        errors = [f for f in report.findings if f.severity == "error"]
-        worst = [f for f in report.findings if f.severity != "info"]
-        click.echo(f"check: {len(errors)} errors, {len(worst) - len(errors)} warnings")
-        for f in worst[:10]:
-            click.echo(f"  {f}")
+        errors = [f for f in job.report.findings if f.severity == "error"]
+        for line in check_lines(job.report.findings, output):
+            click.echo(line)
         if errors:
             raise click.ClickException("the cloned face does not pass validation")

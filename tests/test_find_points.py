@@ -74,14 +74,21 @@ def _groove_rule(V: np.ndarray, T: np.ndarray, prof: dict) -> dict:
     return mouth
 
 
-def groove_points(head: FaceModel) -> dict:
-    """:func:`_groove_rule` on an upright ``head``'s skin, in its own coordinates."""
+def _head_frame(head: FaceModel) -> tuple:
+    """(eye separation, eye-line offset, skin vertices, triangles, mid-line profile points)
+    of an upright ``head`` in its head frame (eye separations, eye line at y = 0, mid
+    plane at x = 0): a point p there is ``(p + eyes) * es`` in the head's coordinates."""
     es = float(np.linalg.norm(head.points["3.5"] - head.points["3.6"]))
     eyes = 0.5 * (head.points["3.5"] + head.points["3.6"]) * [1, 1, 0] / es
     V = head.world_vertices("Skin") / es - eyes
     T = head.meshes["Skin"].triangles
-    mouth = _groove_rule(V, T, _profile_points(_profile(V, T, 0.6, -2.5), 0.0))
-    return {k: (p + eyes) * es for k, p in mouth.items()}
+    return es, eyes, V, T, _profile_points(_profile(V, T, 0.6, -2.5), 0.0)
+
+
+def groove_points(head: FaceModel) -> dict:
+    """:func:`_groove_rule` on an upright ``head``'s skin, in its own coordinates."""
+    es, eyes, V, T, prof = _head_frame(head)
+    return {k: (p + eyes) * es for k, p in _groove_rule(V, T, prof).items()}
 
 
 def _errors(face: FaceModel, found: FoundPoints, truth_face: FaceModel) -> dict:
@@ -93,11 +100,7 @@ def _errors(face: FaceModel, found: FoundPoints, truth_face: FaceModel) -> dict:
     truth = {k: face.points[k] for k in face.points}
     # the menton on the true mesh, in the head's own frame (eye line at y = 0, mid plane
     # at x = 0), carried like the others
-    src_es = float(np.linalg.norm(truth_face.points["3.5"] - truth_face.points["3.6"]))
-    eyes = 0.5 * (truth_face.points["3.5"] + truth_face.points["3.6"]) * [1, 1, 0] / src_es
-    V = truth_face.world_vertices("Skin") / src_es - eyes
-    T = truth_face.meshes["Skin"].triangles
-    prof = _profile_points(_profile(V, T, 0.6, -2.5), 0.0)
+    src_es, eyes, V, T, prof = _head_frame(truth_face)
     menton = ((prof["2.1"] if "2.1" in prof else _menton(
         V, T, {k: truth_face.points[k] / src_es - eyes for k in ("8.2", "2.10")})) + eyes) * src_es
     # the points placed by the 68-landmark convention's proportions (brows, chin corners,
@@ -376,11 +379,9 @@ def test_mouth_corners_do_not_depend_on_the_mesh_resolution(resolution):
     near the mid line: its corners come from that groove at every resolution (they were
     carried by the template at 0.5 and 2.0, 4.4-6.1 % ES0 from where 1.0 had them; the
     groove's end, where it fades, can move by a cell or two)."""
-    found = {}
-    for res in (1.0, resolution):
-        head = reference_head(resolution=res)
-        found[res] = find_feature_points(head).points
-        es = np.linalg.norm(head.points["3.5"] - head.points["3.6"])
+    found = {res: find_feature_points(reference_head(resolution=res)).points
+             for res in (1.0, resolution)}
+    es = reference_head(resolution=1.0).fapu.ES0
     gap = {k: np.linalg.norm(found[resolution][k] - found[1.0][k]) / es
            for k in ("8.3", "8.4", "2.4", "2.5", "2.6", "2.7", "2.8", "2.9")}
     assert max(gap.values()) < 0.04, gap

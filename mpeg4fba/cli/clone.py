@@ -165,8 +165,7 @@ def clone_command(faces: tuple, output: str, source_points: Optional[str], targe
                f"{len(fat.visemes)} visemes, {len(fat.expressions)} expressions "
                f"(mapping {times['mapping the faces']:.2f} s, tables {times['cloning the tables']:.2f} s); wrote {output}")
     if not no_check:
-        errors = [f for f in job.report.findings if f.severity == "error"]
         for line in check_lines(job.report.findings, output):
             click.echo(line)
-        if errors:
+        if any(f.severity == "error" for f in job.report.findings):
             raise click.ClickException("the cloned face does not pass validation")

@@ -1577,8 +1577,7 @@ def _parts(pieces: _Pieces, s, R, t, X, tpl: _Template, pos, tie, reasons) -> se
     names = ("UpperTeeth", "LowerTeeth", "Tongue")
     moved_parts = {n: moved(tpl.parts[n][0]) for n in names}
     trees = {n: cKDTree(v) for n, v in moved_parts.items()}
-    size = {n: float(np.ptp(v, axis=0).max()) for n, v in moved_parts.items()}
-    depth = {n: float(np.ptp(v[:, 2])) for n, v in moved_parts.items()}
+    extent = {n: np.ptp(v, axis=0) for n, v in moved_parts.items()}
     take = {n: [] for n in names}
     up_v, low_v = moved_parts["UpperTeeth"], moved_parts["LowerTeeth"]
     for c in members:
@@ -1588,8 +1587,8 @@ def _parts(pieces: _Pieces, s, R, t, X, tpl: _Template, pos, tie, reasons) -> se
         n = min(d, key=d.get)
         # (no deeper than it either: a mouth's lining can be as wide as a row of teeth
         # stretched by the registration, but is twice as deep)
-        if d[n] < (0.06 if n == "Tongue" else TEETH_REACH) and ext[c] <= 1.3 * size[n] \
-                and np.ptp(Vt[members[c], 2]) <= 1.3 * depth[n]:
+        if d[n] < (0.06 if n == "Tongue" else TEETH_REACH) and ext[c] <= 1.3 * extent[n].max() \
+                and np.ptp(Vt[members[c], 2]) <= 1.3 * extent[n][2]:
             if n != "Tongue":
                 n = _teeth_row(cent[c], up_v, low_v) or n
             take[n].append(c)

@@ -42,6 +42,9 @@ Example
 """
 from __future__ import annotations
 
+import copy
+from functools import lru_cache
+
 import numpy as np
 
 from ..fba.face import FaceMesh, FaceModel, FaceTransform
@@ -115,10 +118,20 @@ def reference_head(*, face_width: float = 1.0, jaw: float = 1.0, nose: float = 1
     1.25) change its proportions; ``resolution`` (0.5 to 4) the density of its meshes
     (the skin has about 11,000 triangles at 1); ``seed`` the jitter of the skin's
     background vertices (so another seed gives another triangulation of the same
-    shape).  Deterministic: the same arguments give the same arrays.
+    shape).  Deterministic: the same arguments give the same arrays.  The last few heads
+    built are kept, and each call gets its own copy (a build takes most of a second; the
+    test suite asks for the same few heads a hundred times); ``reference_head.cache_clear()``
+    forgets them.
     """
     if not 0.5 <= float(resolution) <= 4.0:
         raise ValueError(f"resolution = {resolution}: the reference head takes 0.5 to 4")
+    return copy.deepcopy(_build(float(face_width), float(jaw), float(nose), float(eye_spacing),
+                                float(mouth_width), float(resolution), int(seed)))
+
+
+@lru_cache(maxsize=6)
+def _build(face_width: float, jaw: float, nose: float, eye_spacing: float, mouth_width: float,
+           resolution: float, seed: int) -> FaceModel:
     d = Design(face_width, jaw, nose, eye_spacing, mouth_width)
     skin = build_skin(d, float(resolution), int(seed))
     V = skin.vertices
@@ -205,3 +218,7 @@ def reference_head(*, face_width: float = 1.0, jaw: float = 1.0, nose: float = 1
         face.regions[name + "_upper"] = row[1:n]
         face.regions[name + "_lower"] = row[2 * n - 1:n:-1]
     return face
+
+
+#: Forget the heads kept (a benchmark timing the build itself calls it before each build).
+reference_head.cache_clear = _build.cache_clear

@@ -1173,12 +1173,21 @@ def _head_frame(skin_v: np.ndarray, tpl: _Template, ST: Optional[np.ndarray] = N
     radius = np.sqrt(((sample - c) ** 2).sum(1).mean())
     t_radius = np.sqrt(((A - A.mean(0)) ** 2).sum(1).mean())
     s0 = t_radius / max(radius, 1e-300)
-    trials = []
+    # the 24 starts are ranked on a fifth of each sample (from a wrong start every point
+    # lies far from the other surface, where nearest-neighbour queries are slowest); the
+    # three best are then run on the whole samples.  On 100 ICT heads in random frames
+    # the best start came first either way and the top two agreed: the same heads' frames
+    # in a sixth of the time
+    A5, S5 = A[::5], sample[::5]
+    a5_tree, s5_tree = cKDTree(A5), cKDTree(S5)
+    starts = []
     for R0 in _axis_rotations():
         t0 = A.mean(0) - s0 * R0 @ c
-        trials.append(_icp(A, a_tree, sample, b_tree, s0, R0, t0, 6))
-    trials.sort(key=lambda r: r[3])
-    best = [_icp(A, a_tree, sample, b_tree, *r[:3], 20) for r in trials[:3]]
+        starts.append((_icp(A5, a5_tree, S5, s5_tree, s0, R0, t0, 6)[3], R0, t0))
+    starts.sort(key=lambda r: r[0])
+    trials = sorted((_icp(A, a_tree, sample, b_tree, s0, R0, t0, 6) for _, R0, t0 in starts[:3]),
+                    key=lambda r: r[3])
+    best = [_icp(A, a_tree, sample, b_tree, *r[:3], 20) for r in trials]
     s, R, t, score = min(best, key=lambda r: r[3])
     # a head tilted off the axes (up to 20 degrees and a little more) can hold ICP in a
     # local minimum: restart from the best turned by 15 degrees about each axis

@@ -268,3 +268,28 @@ def test_matched_points_carry_the_sources_convention_to_the_target():
         assert after < max(0.5 * before, 0.02), (k, before, after)
     # parts' points are left as found
     assert np.allclose(got["3.5"], t_found.points["3.5"])
+
+
+def test_a_pupil_without_an_eyeball_takes_the_sources_offset_from_its_opening():
+    from mpeg4fba.cloning import find_feature_points
+    from mpeg4fba.cloning.autopoints import matched_points
+    from mpeg4fba.fba.face import FaceMesh, FaceModel
+    source = reference_head(resolution=0.5)
+    head = reference_head(resolution=0.6, face_width=1.08, jaw=0.94, seed=3)
+    # the same head with no eyeballs: its pupils go to the centres of its eye openings
+    target = FaceModel([FaceMesh(n, head.world_vertices(n), m.triangles)
+                        for n, m in head.meshes.items() if "Eyeball" not in n],
+                       points=head.points, name="no eyeballs")
+    s_found, t_found = find_feature_points(source), find_feature_points(target)
+    assert set(t_found.fit["opening_pupils"]) == {"3.5", "3.6"}
+    got = matched_points(target, t_found, source, source_found=s_found)
+    es_t = es(head)
+    for k in ("3.5", "3.6"):
+        before = np.linalg.norm(t_found.points[k] - head.points[k]) / es_t
+        after = np.linalg.norm(got[k] - head.points[k]) / es_t
+        # the opening's centre lies behind the eyeball's front (2 % of the eye distance
+        # here, 7 % on ICT heads); the source's offset from its own opening puts the
+        # pupil back in front of it
+        assert after < min(0.5 * before, 0.01), (k, before, after)
+    # with eyeballs the pupils are the eyeballs' and stay as found
+    assert find_feature_points(head).fit["opening_pupils"] == ()

@@ -31,7 +31,7 @@ import numpy as np
 from ..fba.face import FaceModel
 from ..fba.featurepoints import FeaturePointSet, point_order
 from .alignment import REQUIRED_POINTS
-from .detect import (PART_OF, SNAP_POINTS, FaceNotFoundError, FoundPoints,
+from .detect import (PART_OF, PUPIL_OPENINGS, SNAP_POINTS, FaceNotFoundError, FoundPoints,
                      find_feature_points, snap_points)
 from .surface import onto_same_sheet
 
@@ -110,7 +110,8 @@ def matched_points(target: FaceModel, found: FoundPoints, source: FaceModel, *,
     the target's goes a little further in too.  The source keeps its points, so its FAT
     stays anchored on them.  Points of parts (eyes, teeth, tongue), points the source
     lacks, and all points when the detector cannot read the source as a face (with a
-    warning) stay as found.  The moved points are tied to a vertex of the sheet they
+    warning) stay as found; but a pupil put at its eye opening's centre, the target
+    having no eyeball, takes the source's pupil's offset from the source's opening.  The moved points are tied to a vertex of the sheet they
     lie on (for the mapping; a sidecar keeps the positions).
 
     >>> from mpeg4fba.models import reference_head
@@ -135,6 +136,17 @@ def matched_points(target: FaceModel, found: FoundPoints, source: FaceModel, *,
         return FeaturePointSet(positions)
     ss, Rs = source_found.fit["s"], source_found.fit["R"]
     st, Rt = found.fit["s"], found.fit["R"]
+    # a pupil put at its eye opening's centre (no eyeball on the target) takes the
+    # source's pupil's offset from the centre of the source's opening found by the same
+    # rule: the canthi lie well behind the cornea, so the centre alone is 7 % of the eye
+    # distance behind and 3 % below an eyeball's pupil (ICT heads without eyeballs)
+    for k in found.fit.get("opening_pupils", ()):
+        eye = PUPIL_OPENINGS[k]
+        if k not in source.points or not all(e in source_found.points for e in eye):
+            continue
+        centre = np.mean([source_found.points[e] for e in eye], axis=0)
+        d = ss * (np.asarray(source.points[k]) - centre) @ Rs.T
+        positions[k] = found.points[k] + d @ Rt / st
     by_mesh: dict = {}
     for k in found.points:
         if k in PART_OF or k not in source.points or k not in source_found.points:

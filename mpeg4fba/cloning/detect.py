@@ -184,6 +184,11 @@ class FoundPoints:
         Unit vectors of the head frame found, in model coordinates.
     scale : float
         Model units per millimetre (the target's eye separation taken as 64 mm).
+    fit : dict
+        The head frame found, ``s``, ``R``, ``t`` (template frame = s R p + t, eye
+        separations), its ``score``, the template bent onto the skin (``deformed``), and
+        ``opening_pupils``: the pupils put at their eye opening's centre for want of an
+        eyeball (:func:`_pupils_in_openings`).
     curves : dict
         Name -> (k, 3) polyline in model coordinates: "upper lip" and "lower lip", each
         lip's edge along the mouth's slit seen from the front, from the right corner to
@@ -1439,7 +1444,7 @@ def find_feature_points(face: FaceModel, *, ids: Optional[Iterable[str]] = None)
         pos[k] = p + (X[nn] - tpl.V[nn]).mean(0)
         resid[k] = float(near_d[nn].mean())
     _parts(pieces, s, R, t, X, tpl, pos, tie, reasons)
-    _pupils_in_openings(pos, resid, reasons)
+    opening_pupils = _pupils_in_openings(pos, resid, reasons)
     # results in model coordinates
     inv = lambda p: (np.asarray(p) - t) @ R / s
     conf = _confidence(pos, resid, crisp_ok, reasons)
@@ -1463,7 +1468,8 @@ def find_feature_points(face: FaceModel, *, ids: Optional[Iterable[str]] = None)
     return FoundPoints(FeaturePointSet(positions, ties), {k: conf[k] for k in keep}, missing,
                        {k: v for k, v in reasons.items() if k in keep or k in missing},
                        up, fwd, float(scale),
-                       fit={"score": score, "s": s, "R": R, "t": t, "deformed": X},
+                       fit={"score": score, "s": s, "R": R, "t": t, "deformed": X,
+                            "opening_pupils": opening_pupils},
                        curves={k: inv(c) for k, c in lip_edges.items()})
 
 
@@ -1657,19 +1663,27 @@ def _teeth_row(centre: np.ndarray, upper: np.ndarray, lower: np.ndarray,
     return "UpperTeeth" if centre[1] > 0.5 * (u.min() + lo.max()) else "LowerTeeth"
 
 
-def _pupils_in_openings(pos, resid, reasons) -> None:
+#: Each pupil's eye opening: its corners and lid middles.
+PUPIL_OPENINGS = {"3.5": ("3.7", "3.11", "3.1", "3.3"), "3.6": ("3.8", "3.12", "3.2", "3.4")}
+
+
+def _pupils_in_openings(pos, resid, reasons) -> tuple:
     """Without an eyeball, a pupil (3.5, 3.6) is put at the centre of its eye opening:
-    the mean of the eye's corners and lid middles.  The FAPU ES0 and cloning's alignment
-    need both pupils on every face (the standard places them with the eyes looking
-    ahead); with no eyeball to move, no eyeball FAP is cloned (see
-    :mod:`mpeg4fba.fba.requirements`), so the pupil's only use is as this landmark."""
-    for fp, eye in (("3.5", ("3.7", "3.11", "3.1", "3.3")), ("3.6", ("3.8", "3.12", "3.2", "3.4"))):
+    the mean of the eye's corners and lid middles (:data:`PUPIL_OPENINGS`); the ids so
+    placed.  The FAPU ES0 and cloning's alignment need both pupils on every face (the
+    standard places them with the eyes looking ahead); with no eyeball to move, no
+    eyeball FAP is cloned (see :mod:`mpeg4fba.fba.requirements`), so the pupil's only use
+    is as this landmark."""
+    placed = []
+    for fp, eye in PUPIL_OPENINGS.items():
         if fp in pos or not all(k in pos for k in eye):
             continue
+        placed.append(fp)
         pos[fp] = np.mean([pos[k] for k in eye], axis=0)
         resid[fp] = float(max(resid.get(k, 0.0) for k in eye))
         reasons[fp] = (reasons.get(fp, "no eyeball") + "; put at the centre of the eye "
                        "opening (the mean of its corners and lid middles)")
+    return tuple(placed)
 
 
 def _confidence(pos, resid, crisp_ok, reasons) -> dict:

@@ -111,8 +111,9 @@ def matched_points(target: FaceModel, found: FoundPoints, source: FaceModel, *,
     stays anchored on them.  Points of parts (eyes, teeth, tongue), points the source
     lacks, and all points when the detector cannot read the source as a face (with a
     warning) stay as found; but a pupil put at its eye opening's centre, the target
-    having no eyeball, takes the source's pupil's offset from the source's opening.  The moved points are tied to a vertex of the sheet they
-    lie on (for the mapping; a sidecar keeps the positions).
+    having no eyeball, takes the source's pupil's offset from the source's opening.  The
+    moved points are tied to a vertex of the sheet they lie on (for the mapping; a
+    sidecar keeps the positions).
 
     >>> from mpeg4fba.models import reference_head
     >>> head = reference_head(resolution=0.5)

@@ -137,6 +137,14 @@ def matched_points(target: FaceModel, found: FoundPoints, source: FaceModel, *,
         return FeaturePointSet(positions)
     ss, Rs = source_found.fit["s"], source_found.fit["R"]
     st, Rt = found.fit["s"], found.fit["R"]
+
+    def moved(k: str, source_ref: np.ndarray) -> np.ndarray:
+        # the target's found point moved by the source's given point's offset from
+        # ``source_ref``, taken in the source's template frame (eye separations), then
+        # put in the target's model frame
+        d = ss * (np.asarray(source.points[k]) - source_ref) @ Rs.T
+        return found.points[k] + d @ Rt / st
+
     # a pupil put at its eye opening's centre (no eyeball on the target) takes the
     # source's pupil's offset from the centre of the source's opening found by the same
     # rule: the canthi lie well behind the cornea, so the centre alone is 7 % of the eye
@@ -145,17 +153,12 @@ def matched_points(target: FaceModel, found: FoundPoints, source: FaceModel, *,
         eye = PUPIL_OPENINGS[k]
         if k not in source.points or not all(e in source_found.points for e in eye):
             continue
-        centre = np.mean([source_found.points[e] for e in eye], axis=0)
-        d = ss * (np.asarray(source.points[k]) - centre) @ Rs.T
-        positions[k] = found.points[k] + d @ Rt / st
+        positions[k] = moved(k, np.mean([source_found.points[e] for e in eye], axis=0))
     by_mesh: dict = {}
     for k in found.points:
         if k in PART_OF or k not in source.points or k not in source_found.points:
             continue
-        # the source's offset in its template frame (eye separations), then in the
-        # target's model frame
-        d = ss * (np.asarray(source.points[k]) - source_found.points[k]) @ Rs.T
-        positions[k] = found.points[k] + d @ Rt / st
+        positions[k] = moved(k, source_found.points[k])
         tie = found.points.vertices.get(k)
         if tie is not None and tie[0] in target.meshes:
             by_mesh.setdefault(tie[0], []).append(k)

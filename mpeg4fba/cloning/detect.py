@@ -1664,7 +1664,7 @@ def _teeth_row(centre: np.ndarray, upper: np.ndarray, lower: np.ndarray,
 
 
 #: Each pupil's eye opening: its corners and lid middles.
-PUPIL_OPENINGS = {"3.5": ("3.7", "3.11", "3.1", "3.3"), "3.6": ("3.8", "3.12", "3.2", "3.4")}
+PUPIL_OPENINGS = {"3.5": _EYE_KEYS["left eye"], "3.6": _EYE_KEYS["right eye"]}
 
 
 def _pupils_in_openings(pos, resid, reasons) -> tuple:

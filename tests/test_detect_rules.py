@@ -118,6 +118,39 @@ def test_parted_lips_give_two_inner_lip_points_either_side_of_the_gap():
     assert -1.04 < pts["2.2"][1] < -1.0 and -1.11 < pts["2.3"][1] < -1.06
 
 
+def _face_with(extra, resolution=0.01):
+    """:func:`_face` with ``extra(Y)`` added to the mid line's relief."""
+    x = np.arange(-1.0, 1.0 + 1e-9, 0.05)
+    y = np.arange(-2.4, 0.6 + 1e-9, resolution)
+
+    def z(X, Y):
+        relief = _face_profile(Y) + extra(Y) - 1.0
+        return 1.0 + relief * np.exp(-0.5 * (X / 0.25) ** 2) - 0.3 * X ** 2
+    return _grid(x, y, z)
+
+
+def test_the_fall_under_a_lower_lip_is_no_parting():
+    # the lower lip's underside falls steeply (5 ES per ES) from y = -1.26, behind the
+    # lips' front by more than a parting's depth within reach of the upper lip, and
+    # stays back to the end of the search: no lower lip comes back below it, so it is no
+    # gap between the lips, and the lips meet at the crease (a head of a fresh ICT draw,
+    # seed 2041, had its underside read as the parting)
+    V, T = _face_with(lambda Y: -5.0 * np.clip(-1.26 - Y, 0, 0.12) * (Y > -1.6))
+    pts = D._profile_points(D._profile(V, T, 0.6, -2.4), 0.0)
+    assert pts["2.2"][1] == pts["2.3"][1] and -1.1 < pts["2.2"][1] < -1.0
+
+
+def test_a_philtrum_crease_is_the_mouth_only_when_the_lips_crease_is_not():
+    # a crease in the philtrum, above the upper lip's bump: taken for the lips' meeting
+    # only when no groove runs the mouth's width from the crease below the bump
+    V, T = _face_with(lambda Y: _bump(Y, -0.88, -0.012, 0.012))
+    prof = D._profile(V, T, 0.6, -2.4)
+    everywhere = D._profile_points(prof, 0.0, lambda p: True)
+    assert -1.1 < everywhere["2.2"][1] < -1.0                  # the lips' crease kept
+    only_above = D._profile_points(prof, 0.0, lambda p: p[1] > -0.93)
+    assert -0.93 < only_above["2.2"][1] < -0.84                # an upper lip with no bump
+
+
 def test_mid_plane_found_for_a_turned_shifted_symmetric_face():
     V, T = _face(resolution=0.02)
     turn = D._turn(np.array([0.0, 1.0, 0.0]), np.radians(4.0))

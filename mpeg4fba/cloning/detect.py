@@ -534,8 +534,13 @@ def _profile_points(prof: _Profile, eye_y: float, lips_ok=None) -> dict:
     if deep.any():
         g0 = int(np.argmax(deep))                       # the first run of deep bins
         run = np.flatnonzero(~deep[g0:])
-        g1 = g0 + (run[0] if len(run) else len(deep) - g0) - 1
-        up, lo = ul + g0 - 1, ul + g1 + 1
+        if not len(run):
+            # no lower lip below it within reach: the fall under the lower lip, or the
+            # chin's, not a parting
+            deep[:] = False
+        else:
+            g1 = g0 + run[0] - 1
+            up, lo = ul + g0 - 1, ul + g1 + 1
     if deep.any():
         # the lips part where the front steps back (a jump of 0.04 ES in one step, or no
         # cut at all); a smooth fall (the labiomental fold of a retruded lower lip), or a
@@ -550,12 +555,14 @@ def _profile_points(prof: _Profile, eye_y: float, lips_ok=None) -> dict:
         peaks_c, _ = find_peaks(c)
         firsts = [p for p in peaks_c if p in set(strong.tolist())]
         up = lo = ul + (firsts[0] if firsts else int(np.argmax(c)))
-    if lips_ok is not None:
+    if lips_ok is not None and not lips_ok(np.array([0.0, yy[up], zz[up]])):
         # an upper lip that does not bulge gives no bump: its first bump was then the
         # lower lip's, and the lips' contact lies above it: a crease between 0.3 ES below
         # the tip (the tip to the stomion is 0.4 ES or more: nose below the tip, then
         # philtrum; a philtrum's crease lies higher) and that bump from which a groove
-        # runs the mouth's width
+        # runs the mouth's width.  Only when no groove runs from the meeting found below
+        # the bump: a short nose's philtrum can hold a crease with a groove-like fold
+        # beside it, above a mouth that is where the bumps say
         f = tip + int(fallen[0])
         a0 = tip + int(0.3 / PROFILE_STEP)
         if ul > a0 + 2:

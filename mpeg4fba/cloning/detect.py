@@ -588,7 +588,12 @@ def _profile_points(prof: _Profile, eye_y: float, lips_ok=None) -> dict:
     # the labiomental fold (the deepest point within 0.35 ES below it)
     # (from the lower lip's front, the most forward point within 0.2 ES below the lips'
     # meeting: the smoothed profile just below a parting still dips into the gap)
-    ll = lo + int(np.argmax(zz[lo:min(lo + int(0.2 / PROFILE_STEP), len(zz) - 1) + 1]))
+    # (its first bump there, else its most forward point: a retruded lower lip can stand
+    # behind the chin's rise 0.2 ES below, which a fresh ICT draw, seed 2043, read as
+    # the lower lip)
+    below = zz[lo:min(lo + int(0.2 / PROFILE_STEP), len(zz) - 1) + 1]
+    bumps, _ = find_peaks(below, prominence=0.0005)
+    ll = lo + (int(bumps[0]) if len(bumps) else int(np.argmax(below)))
     end = min(ll + int(0.35 / PROFILE_STEP), len(zz) - 1)
     fold = ll + int(np.argmin(zz[ll:end + 1]))
     if fold > ll + 2:

@@ -151,6 +151,28 @@ def test_a_philtrum_crease_is_the_mouth_only_when_the_lips_crease_is_not():
     assert -0.93 < only_above["2.2"][1] < -0.84                # an upper lip with no bump
 
 
+def test_a_flat_upper_lip_has_its_front_at_its_knee():
+    # no upper-lip bump: a hollow under the nose, the lip flat down to a knee at -0.95
+    # where it rolls in to the lips' meeting; the lower lip's bump is the first below
+    # the nose, so the meeting is looked for above it, and the lip's front is the knee,
+    # not where the nose's fall ends (a fresh ICT draw, seed 2043, put it there)
+    def flat(Y):
+        return 0.05 / (1 + np.exp(-(Y + 0.97) / 0.012)) - _bump(Y, -0.95, 0.10, 0.05)
+    V, T = _face_with(flat)
+    pts = D._profile_points(D._profile(V, T, 0.6, -2.4), 0.0, lambda p: -1.1 < p[1] < -1.0)
+    assert -1.1 < pts["2.2"][1] < -1.0
+    assert -0.97 < pts["8.1"][1] < -0.91
+    assert pts["8.1"][1] < pts["9.15"][1] < pts["9.3"][1]
+
+
+def test_a_lower_lip_behind_the_chins_rise_is_still_the_lower_lip():
+    # the chin stands 0.07 ES further forward than the lower lip, rising 0.2 ES below
+    # the lips' meeting: 8.2 is on the lower lip's bump, not on the chin
+    V, T = _face_with(lambda Y: 0.15 / (1 + np.exp((Y + 1.24) / 0.015)) * (Y > -1.69))
+    pts = D._profile_points(D._profile(V, T, 0.6, -2.4), 0.0)
+    assert -1.22 < pts["8.2"][1] < -1.1
+
+
 def test_mid_plane_found_for_a_turned_shifted_symmetric_face():
     V, T = _face(resolution=0.02)
     turn = D._turn(np.array([0.0, 1.0, 0.0]), np.radians(4.0))

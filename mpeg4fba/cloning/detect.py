@@ -570,7 +570,11 @@ def _profile_points(prof: _Profile, eye_y: float, lips_ok=None) -> dict:
             for p in pk:
                 if d2[a0 + p] > 0 and lips_ok(np.array([0.0, yy[a0 + p], zz[a0 + p]])):
                     up = lo = a0 + p
-                    ul = _farthest(yy, zz, f, up)
+                    # the lip's front from the corner under the nose (the point furthest
+                    # behind the chord from the nose's fall to the meeting): a flat lip
+                    # below a hollow under the nose has its knee low, not at the fall
+                    # (a fresh ICT draw, seed 2043: 8.1 36 % ES0 off at the fall)
+                    ul = _farthest(yy, zz, _farthest(yy, -zz, f, up), up)
                     out["8.1"] = np.array([0.0, yy[ul], zz[ul]])
                     break
     def front(i):

@@ -171,6 +171,12 @@ class Identity:
     es: float = 0.0
 
 
+def fresh_seeds(seed: int, n: int) -> list:
+    """The case seeds of ``--seed seed`` for ``n`` identities (the first ``k`` of a draw
+    do not depend on ``n``)."""
+    return [int(s) for s in np.random.default_rng(seed).integers(1, 2**31 - 1, n)]
+
+
 def draw_identity(data, index: int, seed: int) -> Identity:
     rng = np.random.default_rng([seed, 1])
     fraction = float(rng.uniform(*FRACTION))
@@ -668,7 +674,7 @@ def main(argv=None) -> int:
         seeds = list(REGRESSION_SEEDS[:n])
         draw = "the fixed regression draw (REGRESSION_SEEDS)"
     else:
-        seeds = [int(s) for s in np.random.default_rng(args.seed).integers(1, 2**31 - 1, n)]
+        seeds = fresh_seeds(args.seed, n)
         draw = f"a fresh draw, --seed {args.seed}"
     n_clone = min(n, args.clone if args.clone is not None else (2 if args.quick else n))
     n_noise = min(n_clone, args.noise if args.noise is not None else (0 if args.quick else 8))

@@ -39,13 +39,14 @@ def _face_profile(y, lip=0.10):
     return z
 
 
-def _face(lip=0.10, resolution=0.01):
-    """:func:`_face_profile` on the mid line, its features narrowing away from it."""
+def _face(lip=0.10, resolution=0.01, extra=None):
+    """:func:`_face_profile` (plus ``extra(Y)``, if given) on the mid line, its features
+    narrowing away from it."""
     x = np.arange(-1.0, 1.0 + 1e-9, 0.05)
     y = np.arange(-2.4, 0.6 + 1e-9, resolution)
 
     def z(X, Y):
-        relief = _face_profile(Y, lip) - _face_profile(Y, 0.0) * 0 - 1.0
+        relief = _face_profile(Y, lip) - 1.0 + (0.0 if extra is None else extra(Y))
         return 1.0 + relief * np.exp(-0.5 * (X / 0.25) ** 2) - 0.3 * X ** 2
     return _grid(x, y, z)
 
@@ -118,24 +119,13 @@ def test_parted_lips_give_two_inner_lip_points_either_side_of_the_gap():
     assert -1.04 < pts["2.2"][1] < -1.0 and -1.11 < pts["2.3"][1] < -1.06
 
 
-def _face_with(extra, resolution=0.01):
-    """:func:`_face` with ``extra(Y)`` added to the mid line's relief."""
-    x = np.arange(-1.0, 1.0 + 1e-9, 0.05)
-    y = np.arange(-2.4, 0.6 + 1e-9, resolution)
-
-    def z(X, Y):
-        relief = _face_profile(Y) + extra(Y) - 1.0
-        return 1.0 + relief * np.exp(-0.5 * (X / 0.25) ** 2) - 0.3 * X ** 2
-    return _grid(x, y, z)
-
-
 def test_the_fall_under_a_lower_lip_is_no_parting():
     # the lower lip's underside falls steeply (5 ES per ES) from y = -1.26, behind the
     # lips' front by more than a parting's depth within reach of the upper lip, and
     # stays back to the end of the search: no lower lip comes back below it, so it is no
     # gap between the lips, and the lips meet at the crease (a head of a fresh ICT draw,
     # seed 2041, had its underside read as the parting)
-    V, T = _face_with(lambda Y: -5.0 * np.clip(-1.26 - Y, 0, 0.12) * (Y > -1.6))
+    V, T = _face(extra=lambda Y: -5.0 * np.clip(-1.26 - Y, 0, 0.12) * (Y > -1.6))
     pts = D._profile_points(D._profile(V, T, 0.6, -2.4), 0.0)
     assert pts["2.2"][1] == pts["2.3"][1] and -1.1 < pts["2.2"][1] < -1.0
 
@@ -143,7 +133,7 @@ def test_the_fall_under_a_lower_lip_is_no_parting():
 def test_a_philtrum_crease_is_the_mouth_only_when_the_lips_crease_is_not():
     # a crease in the philtrum, above the upper lip's bump: taken for the lips' meeting
     # only when no groove runs the mouth's width from the crease below the bump
-    V, T = _face_with(lambda Y: _bump(Y, -0.88, -0.012, 0.012))
+    V, T = _face(extra=lambda Y: _bump(Y, -0.88, -0.012, 0.012))
     prof = D._profile(V, T, 0.6, -2.4)
     everywhere = D._profile_points(prof, 0.0, lambda p: True)
     assert -1.1 < everywhere["2.2"][1] < -1.0                  # the lips' crease kept
@@ -158,7 +148,7 @@ def test_a_flat_upper_lip_has_its_front_at_its_knee():
     # not where the nose's fall ends (a fresh ICT draw, seed 2043, put it there)
     def flat(Y):
         return 0.05 / (1 + np.exp(-(Y + 0.97) / 0.012)) - _bump(Y, -0.95, 0.10, 0.05)
-    V, T = _face_with(flat)
+    V, T = _face(extra=flat)
     pts = D._profile_points(D._profile(V, T, 0.6, -2.4), 0.0, lambda p: -1.1 < p[1] < -1.0)
     assert -1.1 < pts["2.2"][1] < -1.0
     assert -0.97 < pts["8.1"][1] < -0.91
@@ -168,7 +158,7 @@ def test_a_flat_upper_lip_has_its_front_at_its_knee():
 def test_a_lower_lip_behind_the_chins_rise_is_still_the_lower_lip():
     # the chin stands 0.07 ES further forward than the lower lip, rising 0.2 ES below
     # the lips' meeting: 8.2 is on the lower lip's bump, not on the chin
-    V, T = _face_with(lambda Y: 0.15 / (1 + np.exp((Y + 1.24) / 0.015)) * (Y > -1.69))
+    V, T = _face(extra=lambda Y: 0.15 / (1 + np.exp((Y + 1.24) / 0.015)) * (Y > -1.69))
     pts = D._profile_points(D._profile(V, T, 0.6, -2.4), 0.0)
     assert -1.22 < pts["8.2"][1] < -1.1
 

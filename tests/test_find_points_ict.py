@@ -348,8 +348,7 @@ MISREAD_BOUND = 15.0
                          ids=[f"{d}-{i}-{v}" for d, i, v in MISREAD])
 def test_heads_once_misread_are_read(data, detect, draw, index, variant):
     from benchmarks import bench_find_points as bench
-    seed = int(np.random.default_rng(draw).integers(1, 2**31 - 1, 20)[index])
-    ident = bench.draw_identity(data, index, seed)
+    ident = bench.draw_identity(data, index, bench.fresh_seeds(draw, 20)[index])
     det = bench.load_detector()
     res, _ = bench.run_case(det, ident, variant)
     assert "raised" not in res, res["raised"]

@@ -853,22 +853,14 @@ def _groove(D: np.ndarray, i: int, j: int, step: int, reach: int = 3,
         js = np.arange(max(j - 2, reach), min(j + 3, ny - reach))
         if not len(js):
             break
-        if contrast:
-            z, up, dn = D[i, js], D[i, js + reach], D[i, js - reach]
-            with np.errstate(invalid="ignore"):
-                cs = np.where(~np.isfinite(z), np.inf,
-                              np.where(np.isfinite(up) & np.isfinite(dn), 0.5 * (up + dn) - z,
-                                       -np.inf))
-            jb = int(js[np.argmax(cs)])
-        else:
-            jb = int(js[np.argmin(D[i, js])])
-        z, up, dn = D[i, jb], D[i, jb + reach], D[i, jb - reach]
-        if not np.isfinite(z):
-            c = np.inf
-        elif np.isfinite(up) and np.isfinite(dn):
-            c = 0.5 * (up + dn) - z
-        else:
-            c = -np.inf
+        # each candidate's depth behind the mean of its rows ``reach`` above and below
+        # (an empty cell: infinitely deep; a neighbour missing: not a groove)
+        z, up, dn = D[i, js], D[i, js + reach], D[i, js - reach]
+        with np.errstate(invalid="ignore"):
+            cs = np.where(~np.isfinite(z), np.inf,
+                          np.where(np.isfinite(up) & np.isfinite(dn), 0.5 * (up + dn) - z, -np.inf))
+        k = int(np.argmax(cs)) if contrast else int(np.argmin(z))
+        jb, c = int(js[k]), float(cs[k])
         if c >= depth:
             out.extend(pending)
             out.append((i, jb))

@@ -14,6 +14,7 @@ import os
 import signal
 import subprocess
 import sys
+import time
 
 import pytest
 from click.testing import CliRunner
@@ -286,3 +287,53 @@ def test_a_local_cluster_of_its_own(heads, tmp_path):
     assert results.info["workers"] == 1 and seen == ["ok"]
     assert [r["name"] for r in csv.DictReader((tmp_path / "results.csv").read_text().splitlines())] == \
         [str(heads / "head0.wrl")]
+
+
+def _failed(name, error):
+    return {"name": name, "status": "failed", "error": error}
+
+
+def test_tasks_whose_shared_input_died_with_a_worker_are_sent_again(client):
+    """Scattered data is not recomputable, and Dask's memory manager keeps one replica of
+    it where it can: a worker killed with the last one cancels every task waiting on it
+    (a CI run lost three heads so).  Those tasks are sent again, the input scattered
+    afresh."""
+    from mpeg4fba.batch.run import _gather
+    sent = []
+
+    def add(data, i):               # nested: pickled by value for the workers
+        time.sleep(0.3)
+        return {"name": str(i), "status": "ok", "value": sum(data) + i}
+
+    def submit(names, attempt):
+        sent.append((list(names), attempt))
+        if attempt:
+            shared = client.scatter(list(range(10)), broadcast=True, hash=False)
+            return [client.submit(add, shared, int(n), pure=False) for n in names]
+        # the input's only replica and every task on one worker, which then dies
+        w = sorted(client.scheduler_info()["workers"])[0]
+        shared = client.scatter(list(range(10)), workers=[w], hash=False)
+        futures = [client.submit(add, shared, int(n), workers=[w], pure=False) for n in names]
+        os.kill(client.run(os.getpid, workers=[w])[w], signal.SIGKILL)
+        return futures
+
+    out = _gather(submit, ["1", "2", "3"], None, {}, _failed)
+    assert {n: r["value"] for n, r in out.items()} == {"1": 46, "2": 47, "3": 48}
+    assert sent[0] == (["1", "2", "3"], 0) and sent[1][1] == 1
+    assert sorted(n for names, attempt in sent[1:] for n in names) == ["1", "2", "3"]
+
+
+def test_tasks_cancelled_every_time_fail_with_the_reason(client):
+    from mpeg4fba.batch.run import RESENDS, _gather
+    sent = []
+
+    def submit(names, attempt):
+        sent.append(attempt)
+        futures = [client.submit(time.sleep, 5, pure=False) for _ in names]
+        client.cancel(futures)
+        return futures
+
+    counts: dict = {}
+    out = _gather(submit, ["a", "b"], None, counts, _failed)
+    assert counts == {"failed": 2} and set(sent) == set(range(RESENDS + 1))
+    assert out["a"]["error"] == f"its shared input was lost with a worker {RESENDS + 1} times"

@@ -95,19 +95,46 @@ def dashboard_link(client) -> Optional[str]:
         return None
 
 
-def _gather(futures: list, names: list, progress: Optional[Progress],
-            counts: dict, failed_record: Callable[[str, str], dict]) -> dict:
-    """name -> record as the futures end; a future that raised (its worker died too
-    often, say) becomes a failed record."""
+# how often a target is sent again when a shared input (the prepared source, the
+# streams) is lost with the worker that held it
+RESENDS = 3
+
+
+def _gather(submit: Callable, names: list, progress: Optional[Progress], counts: dict,
+            failed_record: Callable[[str, str], dict]) -> dict:
+    """name -> record as the tasks end; a task that raised (its worker died too often,
+    say) becomes a failed record.
+
+    ``submit(names, attempt)`` sends the tasks of ``names`` (their futures, in order).
+    Their shared input is scattered data, which Dask cannot recompute: its replicas are
+    thinned by the active memory manager, so a worker killed at the wrong moment can take
+    the last one with it, and every task still waiting on it is cancelled.  Those tasks
+    are sent again with the input scattered afresh (up to :data:`RESENDS` times)."""
     distributed = _distributed()
-    by_future = dict(zip(futures, names))
+    by_future = dict(zip(submit(names, 0), names))
+    attempts = dict.fromkeys(names, 0)
+    queue = distributed.as_completed(list(by_future))
     out: dict = {}
-    for fut in distributed.as_completed(futures):
-        name = by_future[fut]
+    for fut in queue:
+        name = by_future.pop(fut, None)
+        if name is None:                # cancelled with another one, already sent again
+            continue
+        if fut.cancelled() and attempts[name] < RESENDS:
+            lost = [name] + [n for f, n in by_future.items() if f.cancelled()]
+            for f in [f for f, n in by_future.items() if n in lost]:
+                del by_future[f]
+            attempt = max(attempts[n] for n in lost) + 1
+            attempts.update(dict.fromkeys(lost, attempt))
+            again = submit(lost, attempt)
+            by_future.update(zip(again, lost))
+            queue.update(again)
+            continue
         try:
             record = fut.result()
         except Exception as e:          # noqa: BLE001 - recorded, the batch goes on
-            record = failed_record(name, one_line(e))
+            record = failed_record(name, one_line(e) if not fut.cancelled() else
+                                   f"its shared input was lost with a worker "
+                                   f"{attempts[name] + 1} times")
         out[name] = record
         _tally(record, counts, progress)
         fut.release()
@@ -126,14 +153,16 @@ def _on_cluster(workers: Optional[int], scheduler: Optional[str], client, info: 
                 on_client: Optional[Callable], submit: Callable, names: list,
                 progress: Optional[Progress], counts: dict,
                 failed_record: Callable[[str, str], dict]) -> dict:
-    """Open the cluster, note its size and dashboard in ``info``, ``submit(client)`` the
-    tasks (their futures, in the order of ``names``) and gather their records."""
+    """Open the cluster, note its size and dashboard in ``info``, send the tasks by
+    ``submit(client, names, attempt)`` (their futures, in the order of ``names``) and
+    gather their records."""
     with open_client(workers, scheduler, client) as c:
         info["workers"] = len(c.scheduler_info().get("workers", {}))
         info["dashboard"] = dashboard_link(c)
         if on_client is not None:
             on_client(c)
-        return _gather(submit(c), names, progress, counts, failed_record)
+        return _gather(lambda ns, attempt: submit(c, ns, attempt), names, progress, counts,
+                       failed_record)
 
 
 def _source_key(source, source_points: Optional[str]) -> list:
@@ -257,13 +286,14 @@ def clone_many(source, targets: Iterable, outdir, *, source_points: Optional[str
         prepared = PreparedSource(face, **prep).warm(detect=_needs_points(todo) if detect is None
                                                      else bool(detect))
         info["prepare_seconds"] = round(time.perf_counter() - t, 3)
-        def submit(c) -> list:
-            shared = c.scatter(prepared, broadcast=True, hash=False)
-            return [c.submit(clone_task, shared, tg, settings, outdir, keys[tg.name],
-                             key=f"clone-{tg.name}-{keys[tg.name][:12]}", pure=False)
-                    for tg in todo]
-
         by_name = {tg.name: tg for tg in todo}
+
+        def submit(c, names: list, attempt: int) -> list:
+            shared = c.scatter(prepared, broadcast=True, hash=False)
+            return [c.submit(clone_task, shared, by_name[n], settings, outdir, keys[n],
+                             key=f"clone-{n}-{keys[n][:12]}-{attempt}", pure=False)
+                    for n in names]
+
         records.update(_on_cluster(workers, scheduler, client, info, on_client, submit,
                                    list(by_name), progress, counts,
                                    lambda n, e: {"name": n, "target": by_name[n].path,
@@ -290,8 +320,9 @@ def validate_many(files: Iterable, *, tolerance: float = 0.05, strict: bool = Fa
     info: dict = {"tolerance": tolerance, "strict": strict}
     counts: dict = {}
     records = _on_cluster(workers, scheduler, client, info, on_client,
-                          lambda c: [c.submit(validate_task, os.path.abspath(p), tolerance,
-                                              strict, p, pure=False) for p in paths],
+                          lambda c, names, attempt: [
+                              c.submit(validate_task, os.path.abspath(p), tolerance, strict, p,
+                                       pure=False) for p in names],
                           paths, progress, counts,
                           lambda n, e: {"name": n, "status": "failed", "error": e})
     info["seconds"] = round(time.perf_counter() - t0, 3)
@@ -345,10 +376,12 @@ def play_many(faces: Iterable, streams: Sequence, outdir, *, glb: bool = True,
     todo = _not_done(items, keys, outdir, resume, records, counts, progress)
     info = {"streams": [n for n, _ in named], "settings": settings, "outdir": outdir}
     if todo:
-        def submit(c) -> list:
+        by_name = {tg.name: tg for tg in todo}
+
+        def submit(c, names: list, attempt: int) -> list:
             shared = c.scatter(named, broadcast=True, hash=False)
-            return [c.submit(play_task, tg.path, tg.name, shared, settings, outdir,
-                             keys[tg.name], pure=False) for tg in todo]
+            return [c.submit(play_task, by_name[n].path, n, shared, settings, outdir, keys[n],
+                             pure=False) for n in names]
 
         records.update(_on_cluster(workers, scheduler, client, info, on_client, submit,
                                    [tg.name for tg in todo], progress, counts,

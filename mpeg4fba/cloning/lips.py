@@ -48,14 +48,18 @@ Two details the paper leaves open:
 * Where the slit is a **hole in the mesh** (a mouth modelled open, as ICT-FaceKit's and
   most game heads' are; eyes cut out for eyeballs), its rim says which side a vertex
   hangs from better than any alignment: a boundary loop lying in the slit's region,
-  spanning half its width or more and straddling its mid line is split at its two ends
-  along the slit into an upper and a lower rim, which the field holds at +1 and -1 (its
-  ends, the corners, at 0), and the field then settles every vertex within
-  :data:`RIM_REACH` bands of the mid line.  Misplaced points shift the alignment, not
-  the rims: 1 mm of noise on an ICT head's points had put pieces of the lower lip
-  (1.4 bands from the mid line on a full head, 3 on a decimated one) above it, where
-  they took the upper lip's motion (largest errors 40-58 % of the eye distance).  A
-  welded slit has no such loop and is settled as before.
+  spanning half its width or more and straddling its mid line is split where it meets
+  the mid line's height at its two ends into an upper and a lower rim.  A second field,
+  over the pieces of mesh that hang from a rim, within :data:`RIM_REACH` bands of the
+  mid line, holds the rims at +1 and -1 (stopping :data:`RIM_GUARD` bands short of
+  their ends, which with the band's corners are held at 0); where it is past
+  :data:`RIM_CONFIDENCE` it overrules the band's answer.  Misplaced points shift the
+  alignment, not the rims: 1 mm of noise on an ICT head's points had put pieces of the
+  lower lip (up to 1.4 bands from the mid line on a full head, 3 on a decimated one)
+  above it, where they took the upper lip's motion (largest errors 40-58 % of the eye
+  distance; 12 with the rims).  Round the corners the rims say little (both meet there,
+  and the split can miss a decimated corner by a vertex): there the field is weak and
+  the band's answer stands.  A welded slit has no such loop and is settled as before.
 
 >>> uv = np.array([[0.0, 0.1], [0.0, -0.1], [0.5, 0.0]])
 >>> pts = {"2.4": (0.3, 0.0), "2.6": (0.15, 0.01), "2.2": (0, 0.01), "2.7": (-0.15, 0.01),
@@ -188,8 +192,6 @@ def slit_regions(uv: np.ndarray, points_uv: Mapping, *, slits: Sequence[Slit] = 
         # which way is up: from the lower closing points to the upper ones
         toward = (np.mean([points_uv[p] for p in slit.upper_close], axis=0)
                   - np.mean([points_uv[p] for p in slit.lower_close], axis=0))
-        rims = _rims(uv, loops, ours & ((region == up_label) | (region == low_label)
-                                        | (dist < RIM_REACH * band)), mid, toward)
         near = (dist < band) & along & ours
         if graph is None:
             graph = _edges(tris, np.asarray(vertices, dtype=np.float64))
@@ -218,6 +220,9 @@ def slit_regions(uv: np.ndarray, points_uv: Mapping, *, slits: Sequence[Slit] = 
             if side is not None:
                 region[near & (side > _DECIDED)] = up_label
                 region[near & (side < -_DECIDED)] = low_label
+        rims = _rims(uv, loops, ours & ((region == up_label) | (region == low_label)
+                                        | (dist < RIM_REACH * band)), mid, toward,
+                     RIM_GUARD * band)
         if rims is None:
             continue
         up_rim, low_rim, ends = rims
@@ -281,17 +286,20 @@ RIM_REACH = 4.0
 #: motion on three noisy ICT clones), while the pieces of lip that noise had pushed
 #: across the mid line sit at 0.999.
 RIM_CONFIDENCE = 0.5
+#: How far short of its ends (in bands) a rim stops: where the loop turns at a corner,
+#: which lip a vertex is on is the band's to say.
+RIM_GUARD = 2.0
 
 
 def _rims(uv: np.ndarray, loops: list, zone: np.ndarray, mid: np.ndarray,
-          toward: np.ndarray) -> Optional[tuple]:
+          toward: np.ndarray, guard: float) -> Optional[tuple]:
     """(upper rim, lower rim, corners) of a slit that is a hole in the mesh: each
     boundary loop lying (by 80 % of its vertices) in ``zone``, spanning half the mid
     line's width or more, is split at its two ends along the slit (where it meets the
-    mid line's height); the half further
-    along ``toward`` (by its median) is the upper rim, and it must lie on the far side of
-    the mid line ``mid`` from the other (a hole within one lip does not).  The ends are the corners.
-    None without such a loop.
+    mid line's height); the half further along ``toward`` (by its median) is the upper
+    rim, and it must lie on the far side of the mid line ``mid`` from the other (a hole
+    within one lip does not).  The ends are the corners; the rims stop ``guard`` short
+    of them.  None without such a loop.
     """
     n = len(uv)
     up, low = np.zeros(n, dtype=bool), np.zeros(n, dtype=bool)
@@ -314,16 +322,18 @@ def _rims(uv: np.ndarray, loops: list, zone: np.ndarray, mid: np.ndarray,
             cand = np.flatnonzero(np.abs(u - far) <= 0.1 * span)
             ends.append(int(cand[np.argmin(np.abs(h[cand] - float(m @ t)))]))
         a, b = sorted(ends)
-        one, two = loop[a + 1:b], np.concatenate([loop[b + 1:], loop[:a]])
+        one, two = np.arange(a + 1, b), np.r_[np.arange(b + 1, len(loop)), np.arange(a)]
         if not len(one) or not len(two):
             continue
         # medians: a piece of a rim may be aligned across the mid line, as its lip is
-        h1, h2 = float(np.median(h[a + 1:b])), float(np.median(np.r_[h[b + 1:], h[:a]]))
+        h1, h2 = float(np.median(h[one])), float(np.median(h[two]))
         if h1 < h2:
             one, two, h1, h2 = two, one, h2, h1
         if not h1 > level > h2:
             continue
-        up[one], low[two] = True, True
+        gap = np.min([np.hypot(*(uv[loop] - uv[loop[e]]).T) for e in (a, b)], axis=0)
+        up[loop[one[gap[one] >= guard]]] = True
+        low[loop[two[gap[two] >= guard]]] = True
         corners += [loop[a], loop[b]]
     if not corners:
         return None

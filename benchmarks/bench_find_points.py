@@ -146,14 +146,14 @@ class StandInFound:
 def load_detector() -> Detector:
     """``mpeg4fba.cloning.detect`` if it is there, else the STAND-IN."""
     try:
-        from mpeg4fba.cloning import detect
+        from mpeg4fba.cloning import detect, snapping
     except ImportError:
         def snap(face, points, ids=(), **_):
             return points, {}
         return Detector("STAND-IN (landmark points given back; mpeg4fba.cloning.detect is "
                         "not there yet)", None, snap, tuple(LANDMARK_IDS), False)
     return Detector("mpeg4fba.cloning.detect.find_feature_points", detect.find_feature_points,
-                    detect.snap_points, tuple(detect.SNAP_POINTS), True)
+                    snapping.snap_points, tuple(snapping.SNAP_POINTS), True)
 
 
 # -- cases ----------------------------------------------------------------------------------------

@@ -10,6 +10,8 @@ import numpy as np
 import pytest
 
 from mpeg4fba.cloning import detect as D
+from mpeg4fba.cloning import frontview as F
+from mpeg4fba.cloning import midline as M
 
 
 def _grid(x: np.ndarray, y: np.ndarray, z) -> tuple:
@@ -62,7 +64,7 @@ def _menton_y(lip=0.10) -> float:
 def test_plane_cut_lies_on_the_plane_and_counts_mid_line_vertices():
     V, T = _grid(np.linspace(-1, 1, 9), np.linspace(0, 1, 5), lambda X, Y: X * 0 + Y)
     for x0 in (0.3, 0.0):                     # 0.0: a column of vertices on the plane
-        A, B = D._plane_cut(V, T, x0)
+        A, B = M.plane_cut(V, T, x0)
         assert len(A) > 0
         assert np.allclose(A[:, 0], x0) and np.allclose(B[:, 0], x0)
         # the cut covers the mesh's whole height
@@ -72,8 +74,8 @@ def test_plane_cut_lies_on_the_plane_and_counts_mid_line_vertices():
 
 def test_profile_points_of_a_synthetic_face():
     V, T = _face()
-    prof = D._profile(V, T, 0.6, -2.4)
-    pts = D._profile_points(prof, 0.0)
+    prof = M.profile(V, T, 0.6, -2.4)
+    pts = M.profile_points(prof, 0.0)
     y = {k: p[1] for k, p in pts.items()}
     assert y["9.3"] == pytest.approx(-0.55, abs=0.04)
     assert -1.0 < y["8.1"] < -0.9
@@ -99,7 +101,7 @@ def test_an_upper_lip_as_forward_as_the_nose_is_not_the_nose_tip():
     # the lip stands within 0.05 ES of the tip's height: the tip is still the first
     # peak below the eye line that falls like a nose
     V, T = _face(lip=0.45)
-    pts = D._profile_points(D._profile(V, T, 0.6, -2.4), 0.0)
+    pts = M.profile_points(M.profile(V, T, 0.6, -2.4), 0.0)
     assert pts["9.3"][1] == pytest.approx(-0.55, abs=0.04)
     assert -1.0 < pts["8.1"][1] < -0.9
 
@@ -114,7 +116,7 @@ def test_parted_lips_give_two_inner_lip_points_either_side_of_the_gap():
     x = np.arange(-1.0, 1.0 + 1e-9, 0.05)
     Vb, Tb = _grid(x, np.arange(-1.2, -0.9, 0.01), lambda X, Y: X * 0 + 0.3)
     V2, T2 = np.vstack([V, Vb]), np.vstack([T, Tb + len(V)])
-    pts = D._profile_points(D._profile(V2, T2, 0.6, -2.4), 0.0)
+    pts = M.profile_points(M.profile(V2, T2, 0.6, -2.4), 0.0)
     assert pts["2.2"][1] > pts["2.3"][1]
     assert -1.04 < pts["2.2"][1] < -1.0 and -1.11 < pts["2.3"][1] < -1.06
 
@@ -126,7 +128,7 @@ def test_the_fall_under_a_lower_lip_is_no_parting():
     # gap between the lips, and the lips meet at the crease (a head of a fresh ICT draw,
     # seed 2041, had its underside read as the parting)
     V, T = _face(extra=lambda Y: -5.0 * np.clip(-1.26 - Y, 0, 0.12) * (Y > -1.6))
-    pts = D._profile_points(D._profile(V, T, 0.6, -2.4), 0.0)
+    pts = M.profile_points(M.profile(V, T, 0.6, -2.4), 0.0)
     assert pts["2.2"][1] == pts["2.3"][1] and -1.1 < pts["2.2"][1] < -1.0
 
 
@@ -134,10 +136,10 @@ def test_a_philtrum_crease_is_the_mouth_only_when_the_lips_crease_is_not():
     # a crease in the philtrum, above the upper lip's bump: taken for the lips' meeting
     # only when no groove runs the mouth's width from the crease below the bump
     V, T = _face(extra=lambda Y: _bump(Y, -0.88, -0.012, 0.012))
-    prof = D._profile(V, T, 0.6, -2.4)
-    everywhere = D._profile_points(prof, 0.0, lambda p: True)
+    prof = M.profile(V, T, 0.6, -2.4)
+    everywhere = M.profile_points(prof, 0.0, lambda p: True)
     assert -1.1 < everywhere["2.2"][1] < -1.0                  # the lips' crease kept
-    only_above = D._profile_points(prof, 0.0, lambda p: p[1] > -0.93)
+    only_above = M.profile_points(prof, 0.0, lambda p: p[1] > -0.93)
     assert -0.93 < only_above["2.2"][1] < -0.84                # an upper lip with no bump
 
 
@@ -149,7 +151,7 @@ def test_a_flat_upper_lip_has_its_front_at_its_knee():
     def flat(Y):
         return 0.05 / (1 + np.exp(-(Y + 0.97) / 0.012)) - _bump(Y, -0.95, 0.10, 0.05)
     V, T = _face(extra=flat)
-    pts = D._profile_points(D._profile(V, T, 0.6, -2.4), 0.0, lambda p: -1.1 < p[1] < -1.0)
+    pts = M.profile_points(M.profile(V, T, 0.6, -2.4), 0.0, lambda p: -1.1 < p[1] < -1.0)
     assert -1.1 < pts["2.2"][1] < -1.0
     assert -0.97 < pts["8.1"][1] < -0.91
     assert pts["8.1"][1] < pts["9.15"][1] < pts["9.3"][1]
@@ -159,7 +161,7 @@ def test_a_lower_lip_behind_the_chins_rise_is_still_the_lower_lip():
     # the chin stands 0.07 ES further forward than the lower lip, rising 0.2 ES below
     # the lips' meeting: 8.2 is on the lower lip's bump, not on the chin
     V, T = _face(extra=lambda Y: 0.15 / (1 + np.exp((Y + 1.24) / 0.015)) * (Y > -1.69))
-    pts = D._profile_points(D._profile(V, T, 0.6, -2.4), 0.0)
+    pts = M.profile_points(M.profile(V, T, 0.6, -2.4), 0.0)
     assert -1.22 < pts["8.2"][1] < -1.1
 
 
@@ -180,7 +182,7 @@ def test_eye_opening_seen_from_the_front():
     c = V[T].mean(1)
     hole = ((c[:, 0] - 0.5) / 0.17) ** 2 + (c[:, 1] / 0.06) ** 2 < 1.0
     T = T[~hole]
-    got = D._eye_opening(V, T, np.array([0.5, 0.0, 1.0]), left=True)
+    got = F.eye_opening(V, T, np.array([0.5, 0.0, 1.0]), left=True)
     assert set(got) == {"out", "in", "top", "bottom"}
     assert got["out"][0] == pytest.approx(0.67, abs=0.02)
     assert got["in"][0] == pytest.approx(0.33, abs=0.02)
@@ -188,11 +190,11 @@ def test_eye_opening_seen_from_the_front():
     assert got["bottom"][1] == pytest.approx(-0.06, abs=0.02)
     assert all(p[2] == pytest.approx(1.0) for p in got.values())
     # the right eye's corners the other way round
-    got = D._eye_opening(V, T, np.array([0.5, 0.0, 1.0]), left=False)
+    got = F.eye_opening(V, T, np.array([0.5, 0.0, 1.0]), left=False)
     assert got["out"][0] < got["in"][0]
     # no opening: nothing
     V2, T2 = _grid(np.arange(-0.2, 1.2, 0.02), np.arange(-0.5, 0.5, 0.02), lambda X, Y: X * 0)
-    assert D._eye_opening(V2, T2, np.array([0.5, 0.0, 0.0]), left=True) == {}
+    assert F.eye_opening(V2, T2, np.array([0.5, 0.0, 0.0]), left=True) == {}
 
 
 def _two_eyes(inner: float, outer: float, y0: float = 0.0):
@@ -209,16 +211,16 @@ def _two_eyes(inner: float, outer: float, y0: float = 0.0):
 def test_an_eye_opening_cut_short_gets_its_inner_corner_by_proportion():
     # an eye's opening: both corners where it ends
     V, T, tpl = _two_eyes(0.25, 0.65)
-    got = D._eye_points(V, T, tpl)
+    got = F.eye_points(V, T, tpl)
     assert got["3.11"][0] == pytest.approx(0.25, abs=0.02)
     assert got["3.8"][0] == pytest.approx(-0.25, abs=0.02)
     # a coarse mesh's triangles bridge the lids at the inner corners: the openings end
     # 0.15 further out, too far for an eye (60 % of the outer corner's distance)
     V, T, tpl = _two_eyes(0.40, 0.65)
-    got = D._eye_points(V, T, tpl)
+    got = F.eye_points(V, T, tpl)
     assert got["3.7"][0] == pytest.approx(0.65, abs=0.02)
-    assert got["3.11"][0] == pytest.approx(D.INNER_CANTHAL_RATIO * got["3.7"][0], abs=0.005)
-    assert got["3.8"][0] == pytest.approx(-D.INNER_CANTHAL_RATIO * got["3.7"][0], abs=0.02)
+    assert got["3.11"][0] == pytest.approx(F.INNER_CANTHAL_RATIO * got["3.7"][0], abs=0.005)
+    assert got["3.8"][0] == pytest.approx(-F.INNER_CANTHAL_RATIO * got["3.7"][0], abs=0.02)
     assert got["3.11"][1] == pytest.approx(0.0, abs=0.06) and got["3.11"][2] == pytest.approx(1.0)
 
 
@@ -226,7 +228,7 @@ def test_eyes_lower_than_the_templates_are_found():
     # the rigid fit leaves a long face's eyes up to a third of an eye separation below
     # the template's: the opening is searched that far
     V, T, tpl = _two_eyes(0.25, 0.65, y0=-0.3)
-    got = D._eye_points(V, T, tpl)
+    got = F.eye_points(V, T, tpl)
     assert set(got) == {"3.7", "3.11", "3.1", "3.3", "3.12", "3.8", "3.2", "3.4"}
     assert got["3.1"][1] == pytest.approx(-0.25, abs=0.02)
     assert got["3.3"][1] == pytest.approx(-0.35, abs=0.02)
@@ -239,15 +241,15 @@ def test_lips_groove_ends_at_the_commissures():
         depth = 0.03 * np.clip((0.37 - np.abs(X)) / 0.02, 0, 1)
         return 1.0 - 0.3 * X ** 2 - depth * np.exp(-0.5 * ((Y + 1.05) / 0.015) ** 2)
     V, T = _grid(np.arange(-0.8, 0.8 + 1e-9, 0.01), np.arange(-1.3, -0.8, 0.005), z)
-    got = D._mouth_points(V, T, np.array([0.0, -1.05, 1.0]))
+    got = F.mouth_points(V, T, np.array([0.0, -1.05, 1.0]))
     assert got["8.3"][0] == pytest.approx(0.36, abs=0.02)
     assert got["8.4"][0] == pytest.approx(-0.36, abs=0.02)
-    assert got["2.4"][0] == pytest.approx(D.INNER_CORNER * got["8.3"][0], abs=0.015)
+    assert got["2.4"][0] == pytest.approx(F.INNER_CORNER * got["8.3"][0], abs=0.015)
     assert 0.0 < got["2.6"][0] < got["2.4"][0]
     # no groove: no mouth
     V2, T2 = _grid(np.arange(-0.8, 0.8, 0.02), np.arange(-1.3, -0.8, 0.01),
                    lambda X, Y: 1.0 - 0.3 * X ** 2)
-    assert D._mouth_points(V2, T2, np.array([0.0, -1.05, 1.0])) == {}
+    assert F.mouth_points(V2, T2, np.array([0.0, -1.05, 1.0])) == {}
 
 
 def test_convention_points_follow_their_proportions_on_a_flat_face():
@@ -274,5 +276,5 @@ def test_front_at_takes_the_most_forward_layer():
     V1, T1 = _grid(np.linspace(0, 1, 5), np.linspace(0, 1, 5), lambda X, Y: X * 0 + 0.2)
     V2, T2 = _grid(np.linspace(0, 1, 5), np.linspace(0, 1, 5), lambda X, Y: 0.5 + 0.1 * X)
     V, T = np.vstack([V1, V2]), np.vstack([T1, T2 + len(V1)])
-    z = D._front_at(V, T, np.array([[0.5, 0.5], [2.0, 2.0]]))
+    z = F.front_at(V, T, np.array([[0.5, 0.5], [2.0, 2.0]]))
     assert z[0] == pytest.approx(0.55) and np.isnan(z[1])

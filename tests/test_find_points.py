@@ -18,9 +18,9 @@ import pytest
 
 from mpeg4fba.cloning import (LIP_EDGE_POINTS, SNAP_POINTS, FaceNotFoundError, FoundPoints,
                               find_feature_points, snap_points)
-from mpeg4fba.cloning.detect import (_anchors, _convention_points, _groove, _menton,
-                                     _mouth_points, _profile, _profile_points,
-                                     _shift_to_convention)
+from mpeg4fba.cloning.detect import _anchors, _convention_points, _shift_to_convention
+from mpeg4fba.cloning.frontview import groove, mouth_points
+from mpeg4fba.cloning.midline import menton, profile, profile_points
 from mpeg4fba.fba.face import FaceMesh, FaceModel
 from mpeg4fba.fba.featurepoints import FeaturePointSet
 from mpeg4fba.models import reference_head
@@ -68,7 +68,7 @@ def _groove_rule(V: np.ndarray, T: np.ndarray, prof: dict) -> dict:
     corners on the vermilion's end, 0.04-0.05 ES inside its lips' groove's.)"""
     if "2.2" not in prof:
         return {}
-    mouth = _mouth_points(V, T, 0.5 * (prof["2.2"] + prof["2.3"]))
+    mouth = mouth_points(V, T, 0.5 * (prof["2.2"] + prof["2.3"]))
     if mouth:
         _shift_to_convention(V, T, mouth, {}, np.arange(len(V)))
     return mouth
@@ -82,7 +82,7 @@ def _head_frame(head: FaceModel) -> tuple:
     eyes = 0.5 * (head.points["3.5"] + head.points["3.6"]) * [1, 1, 0] / es
     V = head.world_vertices("Skin") / es - eyes
     T = head.meshes["Skin"].triangles
-    return es, eyes, V, T, _profile_points(_profile(V, T, 0.6, -2.5), 0.0)
+    return es, eyes, V, T, profile_points(profile(V, T, 0.6, -2.5), 0.0)
 
 
 def groove_points(head: FaceModel) -> dict:
@@ -93,7 +93,7 @@ def groove_points(head: FaceModel) -> dict:
 
 def _errors(face: FaceModel, found: FoundPoints, truth_face: FaceModel) -> dict:
     """Point id -> error in % ES0, 2.1 against the menton rule (the profile's, as
-    :func:`mpeg4fba.cloning.detect._profile_points` reads it) on the true skin, the
+    :func:`mpeg4fba.cloning.midline.profile_points` reads it) on the true skin, the
     :data:`~mpeg4fba.cloning.detect.CONVENTION` points against their rule applied to the
     true points."""
     es = float(np.linalg.norm(face.points["3.5"] - face.points["3.6"]))
@@ -101,14 +101,14 @@ def _errors(face: FaceModel, found: FoundPoints, truth_face: FaceModel) -> dict:
     # the menton on the true mesh, in the head's own frame (eye line at y = 0, mid plane
     # at x = 0), carried like the others
     src_es, eyes, V, T, prof = _head_frame(truth_face)
-    menton = ((prof["2.1"] if "2.1" in prof else _menton(
+    chin = ((prof["2.1"] if "2.1" in prof else menton(
         V, T, {k: truth_face.points[k] / src_es - eyes for k in ("8.2", "2.10")})) + eyes) * src_es
     # the points placed by the 68-landmark convention's proportions (brows, chin corners,
     # outer lips' intermediate points, nostril bases): that rule applied to the true
     # crisp points (the reference head draws those points by conventions of its own,
     # up to 0.3 ES away for the outer brows)
     true_pos = {k: truth_face.points[k] / src_es - eyes for k in truth_face.points}
-    true_pos["2.1"] = menton / src_es - eyes
+    true_pos["2.1"] = chin / src_es - eyes
     mouth = _groove_rule(V, T, prof)
     true_pos.update(mouth)
     conv = _convention_points(V, T, true_pos, set(true_pos))
@@ -117,7 +117,7 @@ def _errors(face: FaceModel, found: FoundPoints, truth_face: FaceModel) -> dict:
     conv.update({k: b @ V[T[t]] for k, (t, b) in _anchors(V, T, true_pos).items()})
     scale = es / src_es
     M = _last_turn
-    truth["2.1"] = menton @ M.T * scale
+    truth["2.1"] = chin @ M.T * scale
     for k, p in mouth.items():
         truth[k] = ((p + eyes) * src_es) @ M.T * scale
     for k, p in conv.items():
@@ -363,14 +363,14 @@ def test_a_groove_that_runs_shallow_near_the_mid_line_is_followed_to_its_end():
     # a smooth model's lips meet 0.009 ES deep for a stretch by the mid line, then 0.015;
     # the groove ends at its last strong column, not at the first shallow one
     c = np.r_[0.0, [0.009] * 12, [0.015] * 25, [0.008, 0.004], [0.0] * 20]
-    g = _groove(_lip_line(c), 0, 10, 1)
+    g = groove(_lip_line(c), 0, 10, 1)
     assert [i for i, _ in g] == list(range(1, 38))
     # faint columns (under half the depth) are crossed only a few at a time
     c2 = np.r_[0.0, [0.015] * 10, [0.002] * 3, [0.015] * 5, [0.002] * 4, [0.015] * 5, [0.0] * 10]
-    assert [i for i, _ in _groove(_lip_line(c2), 0, 10, 1)][-1] == 18
+    assert [i for i, _ in groove(_lip_line(c2), 0, 10, 1)][-1] == 18
     # mostly shallow: not a groove
     c3 = np.r_[0.0, [0.008] * 30, [0.012] * 3, [0.0] * 10]
-    assert _groove(_lip_line(c3), 0, 10, 1) == []
+    assert groove(_lip_line(c3), 0, 10, 1) == []
 
 
 @pytest.mark.parametrize("resolution", [0.5, 2.0])

@@ -102,7 +102,8 @@ def points_command(head: str, output: Optional[str], edit: bool, given: Optional
 def _points(head: str, output: str, edit: bool, given: Optional[str], snap: bool,
             preview: Optional[str], lenient: bool) -> None:
     from ..cloning.alignment import REQUIRED_POINTS
-    from ..cloning.detect import find_feature_points, snap_points
+    from ..cloning.detect import find_feature_points
+    from ..cloning.snapping import snap_points
     from ..fba.requirements import required_points
     from ..formats.face_files import read_face
 

@@ -31,8 +31,8 @@ from __future__ import annotations
 from .alignment import REQUIRED_POINTS, FaceSpace, align, alignment_triangles
 from .checks import PlacementError, check_placement
 from .autopoints import PointReport, complete_points
-from .detect import (CRISP_POINTS, LIP_EDGE_POINTS, SNAP_POINTS, FaceNotFoundError,
-                     FoundPoints, find_feature_points, snap_points)
+from .detect import CRISP_POINTS, FaceNotFoundError, FoundPoints, find_feature_points
+from .snapping import LIP_EDGE_POINTS, SNAP_POINTS, snap_points
 from .fmc import CloneWarning, FacialMotionCloner, PreparedSource, clone, required_points_missing
 from .job import CloneJob
 from .local_frames import (LocalFrameCloner, LocalFrameWarning, TopologyError,

@@ -31,8 +31,8 @@ import numpy as np
 from ..fba.face import FaceModel
 from ..fba.featurepoints import FeaturePointSet, point_order
 from .alignment import REQUIRED_POINTS
-from .detect import (PART_OF, PUPIL_OPENINGS, SNAP_POINTS, FaceNotFoundError, FoundPoints,
-                     find_feature_points, snap_points)
+from .detect import PART_OF, PUPIL_OPENINGS, FaceNotFoundError, FoundPoints, find_feature_points
+from .snapping import SNAP_POINTS, snap_points
 from .surface import onto_same_sheet
 
 __all__ = ["PointReport", "complete_points", "matched_points"]
@@ -64,7 +64,7 @@ def complete_points(face: FaceModel, *, required: Iterable[str] = REQUIRED_POINT
     """Give ``face`` (in place) the points it lacks of ``required``, found on its
     geometry; a face with no points at all gets every point found.  Given points stay
     as given, unless ``snap`` moves them onto the geometry
-    (:func:`~mpeg4fba.cloning.detect.snap_points`: the crisp ones, and the inner lips'
+    (:func:`~mpeg4fba.cloning.snapping.snap_points`: the crisp ones, and the inner lips'
     across the slit, in the convention of ``source``, the face the motion comes from,
     when given; ``source_found``: its found points, or a
     :class:`~mpeg4fba.cloning.detect.FaceNotFoundError`).  Raises

@@ -17,16 +17,16 @@ Route (each step a function below), the face's structure found in order:
    :class:`FaceNotFoundError` says which was missing.  **Mid plane** (:func:`_mid_plane`):
    the plane of the skin's mirror symmetry, by a point-to-plane mirror fit, turned to
    x = 0.
-4. **Mid line** (:func:`_profile`, :func:`_profile_points`): the front of the skin's cut by
+4. **Mid line** (:func:`~mpeg4fba.cloning.midline.profile`, :func:`~mpeg4fba.cloning.midline.profile_points`): the front of the skin's cut by
    the mid plane, read from the eye line down: the nose tip (the first peak that falls
    like a nose: an upper lip as forward as the nose is never taken for it), subnasale,
    the upper lip's front, the lips' meeting (a crease or a parting; the crease from which
    a groove runs the mouth's width), the lower lip's vermilion edge, the menton.
-5. **Eyes** (:func:`_eye_opening`): each eye's opening seen from the front (a depth map of
-   the skin, :func:`_depth_map`: a hole, or the skin's edge round an eyeball that is
+5. **Eyes** (:func:`~mpeg4fba.cloning.frontview.eye_opening`): each eye's opening seen from the front (a depth map of
+   the skin, :func:`~mpeg4fba.cloning.frontview.depth_map`: a hole, or the skin's edge round an eyeball that is
    another piece): corners at its lateral ends (the inner one where the groove beyond it
    ends), lid middles at its top and bottom, on the lid margin's front edge.
-6. **Mouth** (:func:`_mouth_points`): the lips' contact groove seen from the front,
+6. **Mouth** (:func:`~mpeg4fba.cloning.frontview.mouth_points`): the lips' contact groove seen from the front,
    followed from the stomion: commissures at its ends, inner corners and inner-lip
    midpoints along it.
 7. **Registration**: the template's skin is bent onto the target's
@@ -50,7 +50,7 @@ Chin convention: 2.1 ("bottom of the chin") is the *menton*, the lowest point of
 on the mid line as seen from the front (the lowest point of the jaw line of a face photo,
 Multi-PIE landmark 8), where the chin's profile turns from facing forward to facing down:
 on the mid-plane profile, walking back up from under the chin, the first point where the
-profile is no steeper than 45 degrees (:func:`_profile_points`; :func:`_menton`, the
+profile is no steeper than 45 degrees (:func:`~mpeg4fba.cloning.midline.profile_points`; :func:`~mpeg4fba.cloning.midline.menton`, the
 same by the surface normals, when the profile has no chin).  The reference head's own 2.1
 lies further back, under the jaw; the landmark convention is what users (and ICT-FaceKit)
 mean and what they can see.
@@ -94,13 +94,14 @@ from scipy.spatial import cKDTree
 from ..fba.face import FaceModel
 from ..fba.featurepoints import FeaturePointSet, normalise_id, point_order
 from ..fba.requirements import FAPU_POINTS, PART_POINTS, required_points
+from . import frontview, midline
 from .alignment import REQUIRED_POINTS
 from .parts import is_eyeball, mesh_components
 from .registration import register_surface
 from .surface import (boundary_loops, closest_points, feature_warp, onto_same_sheet, vertex_normals)
 
-__all__ = ["FaceNotFoundError", "FoundPoints", "find_feature_points", "snap_points", "PART_OF",
-           "CRISP_POINTS", "LIP_EDGE_POINTS", "SNAP_POINTS", "TEMPLATE_ES_MM", "FIT_LIMIT",
+__all__ = ["FaceNotFoundError", "FoundPoints", "find_feature_points", "PART_OF",
+           "CRISP_POINTS", "TEMPLATE_ES_MM", "FIT_LIMIT",
            "SYMMETRY_LIMIT"]
 
 
@@ -109,25 +110,13 @@ class FaceNotFoundError(ValueError):
     was missing (a head-like shape, bilateral symmetry, mouth or eye openings/creases)."""
 
 
-#: The points the geometry defines crisply, which :func:`_refine` (and :func:`snap_points`)
+#: The points the geometry defines crisply, which :func:`_refine` (and
+#: :func:`~mpeg4fba.cloning.snapping.snap_points`)
 #: move onto that geometry: nose tip, chin, mouth corners and mid lips, eye corners and
 #: lid middles.
 CRISP_POINTS = ("2.1", "2.2", "2.3", "2.4", "2.5", "3.1", "3.2", "3.3", "3.4", "3.7", "3.8",
                 "3.11", "3.12", "8.1", "8.2", "8.3", "8.4", "9.3")
 
-#: The inner lips' points and the lip whose edge each lies on.  The geometry pins them
-#: across the mouth's slit but not along it, so :func:`snap_points` moves each across
-#: onto its lip's edge (``FoundPoints.curves``), keeping where along the lip it was
-#: given.  Across is where a misplaced point does harm: on ICT heads, 1 mm of noise
-#: across the slit on these points raised the largest cloning error up to 13 times, the
-#: same noise along it up to 2 times (a point a millimetre above the slit drags the
-#: lips' regions across it).
-LIP_EDGE_POINTS = {"2.2": "upper lip", "2.6": "upper lip", "2.7": "upper lip",
-                   "2.3": "lower lip", "2.8": "lower lip", "2.9": "lower lip"}
-
-#: What :func:`snap_points` moves by default: the crisp points, the inner lips' among
-#: them across the slit only (:data:`LIP_EDGE_POINTS`).
-SNAP_POINTS = CRISP_POINTS + tuple(k for k in LIP_EDGE_POINTS if k not in CRISP_POINTS)
 
 #: The template's eye separation in millimetres (the reference head's ES0): what
 #: ``FoundPoints.scale`` takes the target's to be.
@@ -194,7 +183,8 @@ class FoundPoints:
     curves : dict
         Name -> (k, 3) polyline in model coordinates: "upper lip" and "lower lip", each
         lip's edge along the mouth's slit seen from the front, from the right corner to
-        the left, when the geometry has a contact groove (:func:`snap_points`).
+        the left, when the geometry has a contact groove
+        (:func:`~mpeg4fba.cloning.snapping.snap_points`).
     """
 
     points: FeaturePointSet
@@ -227,8 +217,8 @@ class _Template:
     face: np.ndarray       # skin vertex indices of the face (brows to chin, ear to ear)
     openings: dict         # name -> (centre, {landmark: skin vertex}) of the mouth and eyes
     es: float              # metres
-    profile: dict          # the mid-line points of its profile (:func:`_profile_points`)
-    eyes: dict             # its lid-margin points (:func:`_eye_points`)
+    profile: dict          # the mid-line points of its profile (:func:`~mpeg4fba.cloning.midline.profile_points`)
+    eyes: dict             # its lid-margin points (:func:`~mpeg4fba.cloning.frontview.eye_points`)
     anchors: dict          # id -> (triangle, barycentric) of a point TEMPLATE_SHIFT moves
 
 
@@ -242,7 +232,7 @@ def _template() -> _Template:
     pts = {k: head.points[k] / es for k in head.points}
     skin_index = {k: v for k, (m, v) in head.points.vertices.items() if m == "Skin"}
     # the menton convention for 2.1 (module docstring), applied to the template too
-    pts["2.1"] = _menton(V, T, pts)
+    pts["2.1"] = midline.menton(V, T, pts)
     skin_index["2.1"] = int(np.argmin(np.linalg.norm(V - pts["2.1"], axis=1)))
     parts = {}
     for kind, names in (("eye", ("LeftEyeball", "RightEyeball")), ("teeth", ("UpperTeeth", "LowerTeeth")),
@@ -267,10 +257,10 @@ def _template() -> _Template:
         if got is not None:
             openings[name] = (c, {k: int(v) for k, v in got.items()})
     anchors = _anchors(V, T, pts)
-    prof = _profile_points(_profile(V, T, 0.6, -2.5), 0.0)
+    prof = midline.profile_points(midline.profile(V, T, 0.6, -2.5), 0.0)
     eyes = {}
-    for name, keys in _EYE_KEYS.items():
-        got = _eye_opening(V, T, 0.5 * (pts[keys[0]] + pts[keys[1]]), name == "left eye")
+    for name, keys in frontview.EYE_KEYS.items():
+        got = frontview.eye_opening(V, T, 0.5 * (pts[keys[0]] + pts[keys[1]]), name == "left eye")
         eyes.update({k: got[r] for k, r in zip(keys, ("out", "in", "top", "bottom")) if r in got})
     return _Template(V, T, pts, skin_index, parts, sample, face, openings, es, prof, eyes,
                      anchors)
@@ -360,327 +350,6 @@ def _opening_landmarks(V: np.ndarray, edge: np.ndarray, centre: np.ndarray,
     return out
 
 
-def _menton(V: np.ndarray, T: np.ndarray, pts: dict) -> np.ndarray:
-    """2.1 by the menton rule on a skin in the head frame (x left, y up, z forward, eye
-    separations): on the mid-plane profile below the lower lip (8.2 in ``pts``), the
-    lowest point whose normal points within about 20 degrees of 45 degrees between
-    forward and down, of those no more than 0.6 behind the chin's most forward point (so
-    the chin, not the lower lip's underside above it nor the throat behind it)."""
-    N = vertex_normals(V, T)
-    lip = pts["8.2"]
-    band = np.flatnonzero((np.abs(V[:, 0] - lip[0]) < 0.05) & (V[:, 1] < lip[1] - 0.2)
-                          & (V[:, 1] > lip[1] - 1.2) & (V[:, 2] > lip[2] - 1.0))
-    if not len(band):
-        return pts.get("2.1", lip)
-    front = V[band, 2].max()
-    want = np.array([0.0, -np.sqrt(0.5), np.sqrt(0.5)])
-    good = band[(N[band] @ want > 0.93) & (V[band, 2] > front - 0.6)]
-    if not len(good):
-        return pts.get("2.1", lip)
-    return V[good[np.argmin(V[good, 1])]]
-
-
-# -- the mid-plane profile ---------------------------------------------------------------------
-#: Step (eye separations) of the mid-plane profile's height grid: 0.01 ES (about 0.6 mm),
-#: finer than any ICT or reference-head edge that crosses the mid plane at the lips.
-PROFILE_STEP = 0.01
-#: How far (eye separations) the mid-plane profile must fall below a peak, before rising
-#: as high again, for the peak to be the nose tip: 0.1.  ICT noses fall 0.14-0.35 to the
-#: subnasale (the least where the upper lip stands almost as far forward as the tip); a
-#: glabella falls 0.02-0.08 to the nasion, a dorsal hump less.  The nose is the first
-#: such peak below the eye line, so an upper lip that falls as far to the stomion, below
-#: it, is never taken for it.
-NOSE_FALL = 0.1
-
-
-def _plane_cut(V: np.ndarray, T: np.ndarray, x0: float = 0.0) -> tuple:
-    """(a, b): the segments (k, 3) x 2 where the triangles cross the plane x = ``x0``.  A
-    vertex counts as on the plane's negative side when x < x0, else on its positive side
-    (half-open), so a triangle is cut by two of its edges or none, and a symmetric mesh's
-    mid-line vertices (x = x0 exactly) are cut points too."""
-    side = V[:, 0] < x0
-    s = side[T]
-    cut = s.any(1) & ~s.all(1)
-    Tc = T[cut]
-    sc = s[cut]
-    # the odd vertex out, then the two edges from it
-    odd = np.where(sc.sum(1) == 1, np.argmax(sc, 1), np.argmin(sc, 1))
-    r = np.arange(len(Tc))
-    o, p, q = Tc[r, odd], Tc[r, (odd + 1) % 3], Tc[r, (odd + 2) % 3]
-
-    def cross(i, j):
-        ai, aj = V[i, 0] - x0, V[j, 0] - x0
-        w = ai / (ai - aj)
-        return V[i] + w[:, None] * (V[j] - V[i])
-
-    return cross(o, p), cross(o, q)
-
-
-@dataclass(frozen=True)
-class _Profile:
-    """The front of the mid-plane profile: ``z[i]``, the most forward point of the cut at
-    height ``y[i]`` (template frame, eye separations), smoothed; ``raw`` unsmoothed (NaN
-    where nothing was cut)."""
-    y: np.ndarray
-    z: np.ndarray
-    raw: np.ndarray
-
-    def at(self, i: int) -> np.ndarray:
-        return np.array([0.0, self.y[i], self.z[i]])
-
-
-def _profile(Vt: np.ndarray, T: np.ndarray, top: float, bottom: float) -> _Profile:
-    """The front envelope of the skin's mid-plane cut between heights ``bottom`` and
-    ``top`` (template frame), on a :data:`PROFILE_STEP` grid, gaps filled linearly and
-    smoothed by a Gaussian of 1.5 steps (a decimated mesh's facets, not its shape)."""
-    A, B = _plane_cut(Vt, T)
-    y = np.arange(bottom, top + PROFILE_STEP / 2, PROFILE_STEP)
-    raw = np.full(len(y), -np.inf)
-    if len(A):
-        # each segment rasterised onto the grid (the heights it spans), the most forward kept
-        lo, hi = np.minimum(A[:, 1], B[:, 1]), np.maximum(A[:, 1], B[:, 1])
-        i0 = np.ceil((lo - bottom) / PROFILE_STEP).astype(int)
-        i1 = np.floor((hi - bottom) / PROFILE_STEP).astype(int)
-        i0, i1 = np.maximum(i0, 0), np.minimum(i1, len(y) - 1)
-        n = np.maximum(i1 - i0 + 1, 0)
-        seg = np.repeat(np.arange(len(A)), n)
-        idx = np.arange(n.sum()) - np.repeat(np.cumsum(n) - n, n) + i0[seg]
-        dy = B[seg, 1] - A[seg, 1]
-        w = np.where(np.abs(dy) > 1e-12, (y[idx] - A[seg, 1]) / np.where(dy == 0, 1, dy), 0.5)
-        zz = A[seg, 2] + np.clip(w, 0, 1) * (B[seg, 2] - A[seg, 2])
-        np.maximum.at(raw, idx, zz)
-    have = np.isfinite(raw)
-    if have.sum() < 2:
-        return _Profile(y, np.zeros_like(y), np.where(have, raw, np.nan))
-    z = np.interp(y, y[have], raw[have])
-    k = np.arange(-4, 5)
-    g = np.exp(-0.5 * (k / 1.5) ** 2)
-    zs = np.convolve(np.pad(z, 4, mode="edge"), g / g.sum(), mode="valid")
-    return _Profile(y, zs, np.where(have, raw, np.nan))
-
-
-def _farthest(yy: np.ndarray, zz: np.ndarray, i: int, j: int) -> int:
-    """The index in [i, j] of the profile point furthest in front of (+z side of) the chord
-    from point i to point j: where the profile's tangent is parallel to the chord."""
-    a, b = np.array([yy[i], zz[i]]), np.array([yy[j], zz[j]])
-    d = b - a
-    n = np.array([-d[1], d[0]])
-    if n[1] < 0:
-        n = -n
-    seg = np.c_[yy[i:j + 1], zz[i:j + 1]]
-    return i + int(np.argmax((seg - a) @ n))
-
-
-def _profile_points(prof: _Profile, eye_y: float, lips_ok=None) -> dict:
-    """Mid-line points read off the profile (template frame), walking down from the eye
-    line ``eye_y``: {"9.3", "9.15", "8.1", "2.2", "2.3", "8.2"} where found.
-
-    - the nose: the first peak below the eye line that the profile then falls from by
-      0.15 ES or more before rising as high again (an upper lip standing as far forward as
-      the nose does not qualify: its fall to the stomion is about 0.1 ES; nor the
-      glabella, whose fall to the nasion is smaller still);
-    - 8.1 (labrale superius): the upper lip's most forward point, the first peak below
-      the nose's fall (an upper lip with no bump: its knee, the point furthest in front
-      of the chord from the corner under the nose to the lips' meeting); 8.2 (labrale
-      inferius): the lower lip's, its first bump within 0.2 ES below the meeting (else
-      its most forward point there), then moved down to where the lower lip's bulge
-      turns towards the labiomental fold (the most convex point between them: Multi-PIE's
-      landmark 57 lies on the vermilion's lower edge, not on the bulge's front);
-    - 2.2 and 2.3 (the inner lips' middles): where the lips meet, the deepest point
-      between 8.1 and 8.2 when the lips touch; when they part (the profile steps back
-      more than 0.12 ES into the mouth between them, and comes forward again below: a
-      fall that does not is the lower lip's underside), the upper lip's lowest and the
-      lower lip's highest front points, either side of the gap.  When no groove runs the
-      mouth's width from that meeting, a crease above the first bump from which one does
-      is taken (an upper lip with no bump: the first bump was the lower lip's);
-    - 9.15 (subnasale): the point furthest behind the chord from the nose tip to 8.1
-      (the corner where the columella meets the lip);
-    - 9.3 (pronasale): the point furthest in front of the chord from the sellion (the
-      deepest point between the eye line and the nose) to the subnasale: the tip as
-      seen square to the nose's own axis, so it does not slide with the head's pitch.
-    """
-    from scipy.signal import find_peaks
-    y, z = prof.y, prof.z
-    order = np.argsort(-y)          # top down
-    yy, zz = y[order], z[order]
-    start = int(np.searchsorted(-yy, -eye_y))
-    out = {}
-    peaks, _ = find_peaks(zz, prominence=0.005)
-    peaks = peaks[peaks >= start]
-    # the upper lip's front can be all but flat (a philtrum hardly hollow): any bump
-    # standing out of a decimated mesh's facets (0.002 ES, 0.13 mm: a fresh ICT draw,
-    # seed 2049, had a 0.001 ripple under the nose taken for the lip, 23 % ES0 off); a
-    # lip with no bump at all is read from its knee below
-    lip_peaks, _ = find_peaks(zz, prominence=0.002)
-    tip = None
-    for p in peaks:
-        after = zz[p:]
-        higher = np.flatnonzero(after > zz[p])
-        seg = after[:higher[0]] if len(higher) else after
-        if zz[p] - seg.min() >= NOSE_FALL:
-            tip = p
-            break
-    if tip is None:
-        return out
-    out["9.3"] = np.array([0.0, yy[tip], zz[tip]])
-    fallen = np.flatnonzero(zz[tip:] < zz[tip] - NOSE_FALL)
-    if not len(fallen):
-        return out
-    below = lip_peaks[lip_peaks > tip + fallen[0]]
-    if not len(below):
-        return out
-    ul = below[0]
-    out["8.1"] = np.array([0.0, yy[ul], zz[ul]])
-    # curvature (second difference over 2 steps, + concave: a crease; - convex: a rim)
-    d2 = np.zeros_like(zz)
-    d2[2:-2] = zz[:-4] - 2 * zz[2:-2] + zz[4:]
-    win = int(0.35 / PROFILE_STEP)
-    rz = prof.raw[order]
-    # the lips' meeting: a gap where the raw front steps back into the mouth, else the
-    # first crease at least a fifth as sharp as the sharpest within 0.35 ES below 8.1
-    ref = zz[ul]
-    span = slice(ul, min(ul + win, len(zz) - 1) + 1)
-    deep = ~(rz[span] > ref - 0.12)
-    if deep.any():
-        g0 = int(np.argmax(deep))                       # the first run of deep bins
-        run = np.flatnonzero(~deep[g0:])
-        if not len(run):
-            # no lower lip below it within reach: the fall under the lower lip, or the
-            # chin's, not a parting
-            deep[:] = False
-        else:
-            g1 = g0 + run[0] - 1
-            up, lo = ul + g0 - 1, ul + g1 + 1
-    if deep.any():
-        # the lips part where the front steps back (a jump of 0.04 ES in one step, or no
-        # cut at all); a smooth fall (the labiomental fold of a retruded lower lip), or a
-        # "gap" taller than 0.12 ES, is no parting
-        r = rz[up:lo + 1]
-        jump = ~np.isfinite(r).all() or np.nanmax(np.abs(np.diff(r))) > 0.04
-        if not jump or lo - up > 0.12 / PROFILE_STEP:
-            deep[:] = False
-    if not deep.any():
-        c = d2[span]
-        strong = np.flatnonzero((c >= 0.2 * c.max()) & (c > 0))
-        peaks_c, _ = find_peaks(c)
-        firsts = [p for p in peaks_c if p in set(strong.tolist())]
-        up = lo = ul + (firsts[0] if firsts else int(np.argmax(c)))
-    if lips_ok is not None and not lips_ok(np.array([0.0, yy[up], zz[up]])):
-        # an upper lip that does not bulge gives no bump: its first bump was then the
-        # lower lip's, and the lips' contact lies above it: a crease between 0.3 ES below
-        # the tip (the tip to the stomion is 0.4 ES or more: nose below the tip, then
-        # philtrum; a philtrum's crease lies higher) and that bump from which a groove
-        # runs the mouth's width.  Only when no groove runs from the meeting found below
-        # the bump: a short nose's philtrum can hold a crease with a groove-like fold
-        # beside it, above a mouth that is where the bumps say
-        f = tip + int(fallen[0])
-        a0 = tip + int(0.3 / PROFILE_STEP)
-        if ul > a0 + 2:
-            pk, _ = find_peaks(d2[a0:ul])
-            for p in pk:
-                if d2[a0 + p] > 0 and lips_ok(np.array([0.0, yy[a0 + p], zz[a0 + p]])):
-                    up = lo = a0 + p
-                    # the lip's front from the corner under the nose (the point furthest
-                    # behind the chord from the nose's fall to the meeting): a flat lip
-                    # below a hollow under the nose has its knee low, not at the fall
-                    # (a fresh ICT draw, seed 2043: 8.1 36 % ES0 off at the fall)
-                    ul = _farthest(yy, zz, _farthest(yy, -zz, f, up), up)
-                    out["8.1"] = np.array([0.0, yy[ul], zz[ul]])
-                    break
-    def front(i):
-        # the raw front at bin i, or the nearest bin's within two (the smoothed one dips
-        # into a parting's gap), unless that is the inside of the mouth or head seen
-        # through the gap
-        for o in (0, -1, 1, -2, 2):
-            if 0 <= i + o < len(rz) and np.isfinite(rz[i + o]) and rz[i + o] > zz[i] - 0.15:
-                return rz[i + o]
-        return zz[i]
-
-    out["2.2"] = np.array([0.0, yy[up], front(up)])
-    out["2.3"] = np.array([0.0, yy[lo], front(lo)])
-    # 8.2: the lower lip's rim, the most convex point between the lower lip's front and
-    # the labiomental fold (the deepest point within 0.35 ES below it)
-    # (from the lower lip's front, the most forward point within 0.2 ES below the lips'
-    # meeting: the smoothed profile just below a parting still dips into the gap)
-    # (its first bump there, else its most forward point: a retruded lower lip can stand
-    # behind the chin's rise 0.2 ES below, which a fresh ICT draw, seed 2043, read as
-    # the lower lip)
-    below = zz[lo:min(lo + int(0.2 / PROFILE_STEP), len(zz) - 1) + 1]
-    bumps, _ = find_peaks(below, prominence=0.0005)
-    ll = lo + (int(bumps[0]) if len(bumps) else int(np.argmax(below)))
-    end = min(ll + int(0.35 / PROFILE_STEP), len(zz) - 1)
-    fold = ll + int(np.argmin(zz[ll:end + 1]))
-    if fold > ll + 2:
-        i8 = ll + int(np.argmin(d2[ll:fold]))
-        out["8.2"] = np.array([0.0, yy[i8], zz[i8]])
-    # 2.1 (menton; the module docstring's convention): from under the chin (where the
-    # profile has fallen 0.4 ES behind the chin's front, 0.25 ES or more below the lips'
-    # meeting) back up the chin's underside to where it turns 45 degrees from facing down
-    # to facing forward (the lower lip's underside can be as steep, so not walking down)
-    a0 = lo + int(0.25 / PROFILE_STEP)
-    if a0 < len(zz) - 2:
-        front = np.maximum.accumulate(zz[a0:])
-        under = np.flatnonzero(zz[a0:] < front - 0.4)
-        if len(under):
-            m = a0 + int(under[0])
-            while m - 1 > a0 and (zz[m - 2] - zz[m]) / (2 * PROFILE_STEP) >= 1.0:
-                m -= 1
-            out["2.1"] = np.array([0.0, yy[m], zz[m]])
-    # subnasale: furthest behind the chord tip -> upper lip
-    a, b = np.array([yy[tip], zz[tip]]), np.array([yy[ul], zz[ul]])
-    d = b - a
-    n = np.array([-d[1], d[0]])
-    if n[1] > 0:
-        n = -n
-    sn = tip + int(np.argmax((np.c_[yy[tip:ul + 1], zz[tip:ul + 1]] - a) @ n))
-    out["9.15"] = np.array([0.0, yy[sn], zz[sn]])
-    # the tip square to the nose's axis (sellion -> subnasale)
-    top = max(start - int(0.3 / PROFILE_STEP), 0)
-    se = top + int(np.argmin(zz[top:tip + 1]))
-    t2 = _farthest(yy, zz, se, sn)
-    out["9.3"] = np.array([0.0, yy[t2], zz[t2]])
-    return out
-
-
-# -- the eye openings, seen from the front ----------------------------------------------------
-#: Cell size (eye separations) of the front-view depth maps of the eyes: 0.01 ES.
-DEPTH_CELL = 0.01
-
-
-def _depth_map(Vt: np.ndarray, T: np.ndarray, lo: np.ndarray, hi: np.ndarray,
-               cell: float = DEPTH_CELL) -> np.ndarray:
-    """The skin seen from the front (+z) in the box ``lo``..``hi`` (template frame):
-    (nx, ny) grid of the most forward z of the triangles over each cell centre, NaN where
-    no triangle is.  Each triangle in the box is sampled on a barycentric lattice fine
-    enough for the cell size (its longest edge over half a cell), so a decimated mesh's
-    large triangles leave no gaps."""
-    nx = int(np.ceil((hi[0] - lo[0]) / cell))
-    ny = int(np.ceil((hi[1] - lo[1]) / cell))
-    out = np.full((nx, ny), -np.inf)
-    P = Vt[T]                                             # (m, 3, 3)
-    inb = ((P[:, :, 0].max(1) >= lo[0]) & (P[:, :, 0].min(1) <= hi[0])
-           & (P[:, :, 1].max(1) >= lo[1]) & (P[:, :, 1].min(1) <= hi[1])
-           & (P[:, :, 2].max(1) >= lo[2]))
-    P = P[inb]
-    if not len(P):
-        return np.full((nx, ny), np.nan)
-    edge = np.linalg.norm(P - P[:, [1, 2, 0]], axis=2).max(1)
-    nsub = np.clip(np.ceil(edge / (0.5 * cell)).astype(int), 1, 64)
-    for n in np.unique(nsub):
-        tri = P[nsub == n]
-        i, j = np.meshgrid(np.arange(n + 1), np.arange(n + 1), indexing="ij")
-        keep = i + j <= n
-        a, b = i[keep] / n, j[keep] / n
-        w = np.c_[1 - a - b, a, b]                        # (k, 3)
-        Q = np.einsum("kv,mvc->mkc", w, tri).reshape(-1, 3)
-        ix = np.floor((Q[:, 0] - lo[0]) / cell).astype(int)
-        iy = np.floor((Q[:, 1] - lo[1]) / cell).astype(int)
-        ok = (ix >= 0) & (ix < nx) & (iy >= 0) & (iy < ny) & (Q[:, 2] >= lo[2])
-        np.maximum.at(out, (ix[ok], iy[ok]), Q[ok, 2])
-    out[~np.isfinite(out)] = np.nan
-    return out
-
-
 # -- points no geometry marks: placed by proportion from the crisp ones ---------------------------
 #: Points along a contour the crisp points bound (the outer lips' intermediate points, the
 #: nostril base's ends), placed by the proportions of the Multi-PIE / iBUG 68-landmark
@@ -708,30 +377,6 @@ CONVENTION = {
 _CONVENTION_RIGHT = {"8.6": "8.5", "8.9": "8.10", "8.8": "8.7", "9.4": "9.5"}
 
 
-def _front_at(Vt: np.ndarray, T: np.ndarray, xy: np.ndarray) -> np.ndarray:
-    """(k,) the most forward z of the skin over each point ``xy`` (k, 2) (template frame),
-    NaN where no triangle is over it."""
-    P = Vt[T]
-    out = np.full(len(xy), np.nan)
-    lo, hi = P[:, :, :2].min(1), P[:, :, :2].max(1)
-    for n, q in enumerate(xy):
-        m = np.flatnonzero(np.all((lo <= q) & (hi >= q), axis=1))
-        if not len(m):
-            continue
-        a, b, c = P[m, 0], P[m, 1], P[m, 2]
-        v0, v1, v2 = b[:, :2] - a[:, :2], c[:, :2] - a[:, :2], q - a[:, :2]
-        den = v0[:, 0] * v1[:, 1] - v1[:, 0] * v0[:, 1]
-        ok = np.abs(den) > 1e-15
-        den = np.where(ok, den, 1.0)
-        u = (v2[:, 0] * v1[:, 1] - v1[:, 0] * v2[:, 1]) / den
-        v = (v0[:, 0] * v2[:, 1] - v2[:, 0] * v0[:, 1]) / den
-        inside = ok & (u >= -1e-9) & (v >= -1e-9) & (u + v <= 1 + 1e-9)
-        if inside.any():
-            z = (a[:, 2] + u * (b[:, 2] - a[:, 2]) + v * (c[:, 2] - a[:, 2]))[inside]
-            out[n] = z.max()
-    return out
-
-
 def _convention_points(Vt: np.ndarray, T: np.ndarray, pos: dict, crisp: set) -> dict:
     """The :data:`CONVENTION` points (and their mirror partners) from the crisp points in
     ``pos`` (template frame; only those in ``crisp`` are used), on the skin's front."""
@@ -755,7 +400,7 @@ def _convention_points(Vt: np.ndarray, T: np.ndarray, pos: dict, crisp: set) -> 
     if not xy:
         return {}
     keys = list(xy)
-    z = _front_at(Vt, T, np.array([xy[k] for k in keys]))
+    z = frontview.front_at(Vt, T, np.array([xy[k] for k in keys]))
     # on the face's front, not far behind where the registration put the point (one
     # dropped into an opening would find the inside of the head, an eye separation or
     # more behind)
@@ -818,304 +463,6 @@ def _shift_to_convention(Vt: np.ndarray, T: np.ndarray, pos: dict, tie: dict,
     near = cKDTree(Vt).query(on)[1]
     for k, p, v in zip(keys, on, near):
         pos[k], tie[k] = p, skin_ids[v]
-
-
-#: Where Multi-PIE's inner lip corners (landmarks 60/64, MPEG-4 2.4/2.5) lie on a closed
-#: mouth, as a fraction of the way from the mid line to the commissure along the lips'
-#: contact groove: 0.875 (the inner corners sit an eighth of the mouth's half width
-#: inside the commissures: 0.86-0.89 on ICT-FaceKit identities, measured on the mean
-#: face and four random identities; a closed mouth's contact line has no geometric mark
-#: there, and a slit between the lips seen from the front ends anywhere from a third to
-#: two thirds of the way out, so it marks nothing either).
-INNER_CORNER = 0.875
-
-
-def _groove(D: np.ndarray, i: int, j: int, step: int, reach: int = 3,
-            depth: float = 0.01, slack: int = 3, contrast: bool = False) -> list:
-    """The cells (i, j) of the groove of the depth map ``D`` (front-view z, -inf where
-    empty) followed from (i, j) along x (``step`` = +-1): at each column the deepest cell
-    within two cells of the last one's height (an empty cell is deepest: an opening), or
-    with ``contrast`` the one lying deepest behind the mean of the cells ``reach`` rows
-    above and below it (an empty cell most of all).  A
-    column is strong where that cell lies ``depth`` (0.01 ES, 0.6 mm) or more behind the
-    mean of the cells ``reach`` rows above and below it, faint where less than half that
-    (the smooth skin beyond the groove's end).  The groove is followed through columns
-    between the two (a lip line that runs shallow for a stretch: a smooth model's lips
-    meet 0.009-0.010 ES deep near the mid line) and across up to ``slack`` faint ones in a
-    row (a decimated mesh's facets make a shallow groove flicker); it ends at its last
-    strong cell, and is [] unless half its columns or more are strong."""
-    out, pending, faint, strong = [], [], 0, 0
-    ny = D.shape[1]
-    for _ in range(D.shape[0]):
-        i += step
-        if not 0 <= i < D.shape[0]:
-            break
-        js = np.arange(max(j - 2, reach), min(j + 3, ny - reach))
-        if not len(js):
-            break
-        # each candidate's depth behind the mean of its rows ``reach`` above and below
-        # (an empty cell: infinitely deep; a neighbour missing: not a groove)
-        z, up, dn = D[i, js], D[i, js + reach], D[i, js - reach]
-        with np.errstate(invalid="ignore"):
-            cs = np.where(~np.isfinite(z), np.inf,
-                          np.where(np.isfinite(up) & np.isfinite(dn), 0.5 * (up + dn) - z, -np.inf))
-        k = int(np.argmax(cs)) if contrast else int(np.argmin(z))
-        jb, c = int(js[k]), float(cs[k])
-        if c >= depth:
-            out.extend(pending)
-            out.append((i, jb))
-            pending, faint = [], 0
-            strong += 1
-        else:
-            pending.append((i, jb))
-            faint = faint + 1 if c < 0.5 * depth else 0
-            if faint > slack:
-                break
-        j = jb
-    return out if 2 * strong >= len(out) else []
-
-
-def _mouth_points(Vt: np.ndarray, T: np.ndarray, stomion: np.ndarray) -> dict:
-    """The mouth's points of :func:`_mouth` (without the lips' edges)."""
-    return _mouth(Vt, T, stomion)[0]
-
-
-def _mouth(Vt: np.ndarray, T: np.ndarray, stomion: np.ndarray) -> tuple:
-    """(points, lip edges): the mouth's corners from the lips' contact groove seen from the front (template
-    frame): the groove (:func:`_groove`) of the skin's depth map followed from the
-    stomion (the profile's lips' meeting) to each side; its ends are the commissures
-    (8.3, 8.4: the outer corners); the inner corners (2.4, 2.5) are the groove's points
-    :data:`INNER_CORNER` of the way out; 2.6-2.9 (the inner lips'
-    midpoints) on the groove half way to the inner corners: its edges above and below
-    where it is open there, a cell (0.01 ES) above and below its bottom where closed.
-    The lip edges, "upper lip" and "lower lip", are the (k, 3) polylines so taken at
-    every column of the groove, from the right corner to the left: where each lip meets
-    the other or ends at the opening, seen from the front.  ({}, {}) without a groove a
-    mouth's width (0.45 to 1.4 ES) whose ends lie symmetrically about the mid line
-    (within 15 % of its width)."""
-    lo = np.array([-0.75, stomion[1] - 0.2, stomion[2] - 0.6])
-    hi = np.array([0.75, stomion[1] + 0.2])
-    D = _depth_map(Vt, T, lo, hi)
-    F = np.where(np.isnan(D), -np.inf, D)
-    i0 = int((0.0 - lo[0]) / DEPTH_CELL)
-    j0 = int((stomion[1] - lo[1]) / DEPTH_CELL)
-    # the deepest cells followed; where that gives no mouth, the cells deepest against
-    # their neighbours above and below (a coarse lower lip's facet sloping back below
-    # the groove can lead the deepest-cell walk off it: a fresh ICT draw, seed 2045, had
-    # its mouth read in the lower lip's fold so).  Not first: on the regression draw's
-    # decimated heads it puts the corners further off (mouth corners' max 6.1 -> 12.8).
-    for contrast in (False, True):
-        sides = {}
-        for name, step in (("left", 1), ("right", -1)):
-            g = _groove(F, i0, j0, step, contrast=contrast)
-            if g:
-                sides[name] = g
-        if len(sides) < 2:
-            continue
-        width = (sides["left"][-1][0] - sides["right"][-1][0]) * DEPTH_CELL
-        skew = (sides["left"][-1][0] + sides["right"][-1][0] - 2 * i0) * DEPTH_CELL
-        if 0.45 <= width <= 1.4 and abs(skew) <= 0.15 * width:
-            break
-    else:
-        return {}, {}
-    cx = lambda i: lo[0] + (i + 0.5) * DEPTH_CELL
-    cy = lambda j: lo[1] + (j + 0.5) * DEPTH_CELL
-
-    def at(i, j, dj=0):
-        # the surface point at cell (i, j): its depth, or the first filled cell in dj
-        while not np.isfinite(F[i, j]) and dj and 0 <= j + dj < F.shape[1]:
-            j += dj
-        return np.array([cx(i), cy(j), F[i, j]]) if np.isfinite(F[i, j]) else None
-
-    out = {}
-    for name, (outer, inner, up, dn) in (("left", ("8.3", "2.4", "2.6", "2.8")),
-                                         ("right", ("8.4", "2.5", "2.7", "2.9"))):
-        g = sides[name]
-        ie, je = g[-1]
-        p = at(ie, je)
-        if p is not None:
-            out[outer] = p
-        # (not the end of an opening seen from the front: lips modelled as two sheets
-        # leave a slit a third to two thirds of the way out, and ICT's inner corners stay
-        # 0.045-0.055 ES inside the commissures whether or not it is there)
-        k = int(np.argmin([abs(abs(cx(i)) - INNER_CORNER * abs(cx(ie))) for i, _ in g]))
-        ic, jc = g[k]
-        p = at(ic, jc, 1) if not np.isfinite(F[ic, jc]) else at(ic, jc)
-        if p is not None:
-            out[inner] = p
-        # half way along the groove (arc length, in 3D) to the inner corner
-        pts = [at(i, j, 1) for i, j in g[:k + 1]]
-        ok = [q is not None for q in pts]
-        Q = np.array([q for q in pts if q is not None])
-        if len(Q) < 2:
-            continue
-        arc = np.r_[0, np.cumsum(np.linalg.norm(np.diff(Q, axis=0), axis=1))]
-        h = int(np.flatnonzero(ok)[np.argmin(np.abs(arc - 0.5 * arc[-1]))])
-        ih, jh = g[h]
-        if np.isfinite(F[ih, jh]):
-            # closed there: a cell off the groove's bottom, on each lip (the bottom itself
-            # is where both lips touch, and a point there belongs to neither)
-            pu, pd = at(ih, jh + 1), at(ih, jh - 1)
-        else:
-            pu, pd = at(ih, jh, 1), at(ih, jh, -1)
-        if pu is not None and pd is not None:
-            out[up], out[dn] = pu, pd
-    edges: dict = {"upper lip": [], "lower lip": []}
-    for i, j in sides["right"][::-1] + sides["left"]:
-        closed = np.isfinite(F[i, j])
-        for name, dj in (("upper lip", 1), ("lower lip", -1)):
-            p = at(i, j + dj) if closed else at(i, j, dj)
-            if p is not None:
-                edges[name].append(p)
-    return out, {k: np.array(v) for k, v in edges.items() if len(v) >= 2}
-
-
-#: Each eye's lid-margin points: outer corner, inner corner, upper and lower lid middles.
-_EYE_KEYS = {"left eye": ("3.7", "3.11", "3.1", "3.3"), "right eye": ("3.12", "3.8", "3.2", "3.4")}
-
-
-#: The inner canthi's distance over the outer canthi's (3.11-3.8 over 3.7-3.12): 0.412 on
-#: 40 random ICT-FaceKit identities (sd 0.023, range 0.36-0.45); adult anthropometry
-#: gives 0.35-0.37 (about 32 mm between the inner canthi, 90 mm between the outer).
-INNER_CANTHAL_RATIO = 0.41
-#: An eye opening that ends further from the mid line than this fraction of its outer
-#: corner's distance is not the whole eye (4 sd above the ICT mean, far above people's):
-#: a coarse mesh's triangles bridge the lids near the inner corner, and the opening seen
-#: from the front stops up to 0.15 eye separations short of it.  The corner then goes at
-#: :data:`INNER_CANTHAL_RATIO` of the way.
-INNER_CANTHAL_LIMIT = 0.5
-
-
-def _eye_points(Vt: np.ndarray, T: np.ndarray, tpl) -> dict:
-    """The lid-margin points of both eyes (:func:`_eye_opening`), each eye searched round
-    where the template's eye lies after the rigid fit; an eye without an opening of an
-    eye's size there gives none.  An inner corner too far out for an eye
-    (:data:`INNER_CANTHAL_LIMIT`) is put where the canthi's proportion puts it, on the
-    skin's front at the opening's end's height."""
-    out = {}
-    for name, keys in _EYE_KEYS.items():
-        c = 0.5 * (tpl.points[keys[0]] + tpl.points[keys[1]])
-        got = _eye_opening(Vt, T, c, name == "left eye")
-        if "in" in got and abs(got["in"][0]) > INNER_CANTHAL_LIMIT * abs(got["out"][0]):
-            xy = np.array([np.sign(got["out"][0]) * INNER_CANTHAL_RATIO * abs(got["out"][0]),
-                           got["in"][1]])
-            z = _front_at(Vt, T, xy[None])[0]
-            if np.isfinite(z):
-                got["in"] = np.array([*xy, z])
-        out.update({k: got[r] for k, r in zip(keys, ("out", "in", "top", "bottom")) if r in got})
-    return out
-
-
-def _groove_end(D: np.ndarray, i: int, j: int, step: int, reach: int = 3,
-                depth: float = 0.01) -> Optional[tuple]:
-    """Following the groove of the depth map ``D`` (front-view z, -inf where empty) from
-    the opening's extreme cell (i, j) outward along x (``step`` = +-1): at each column the
-    deepest cell within two cells of the last one's height, kept while it lies ``depth``
-    (0.01 ES, 0.6 mm) or more behind the mean of the cells ``reach`` rows above and below
-    it (a groove, not the smooth skin beyond the corner), for 0.07 ES at most (a
-    caruncle's pocket reaches 0.04-0.06 ES; on a coarse mesh the side of the nose can
-    look like a groove going on); the last groove cell, or None."""
-    last = None
-    ny = D.shape[1]
-    for _ in range(int(0.07 / DEPTH_CELL)):
-        i += step
-        if not 0 <= i < D.shape[0]:
-            break
-        js = np.arange(max(j - 2, reach), min(j + 3, ny - reach))
-        if not len(js):
-            break
-        col = D[i, js]
-        if not np.isfinite(col).any():
-            continue                      # still in the opening
-        jb = int(js[np.argmax(np.where(np.isfinite(col), -col, -np.inf))])
-        z, up, dn = D[i, jb], D[i, jb + reach], D[i, jb - reach]
-        if not (np.isfinite(up) and np.isfinite(dn)) or 0.5 * (up + dn) - z < depth:
-            break
-        last, j = (i, jb), jb
-    return last
-
-
-def _eye_opening(Vt: np.ndarray, T: np.ndarray, centre: np.ndarray, left: bool) -> dict:
-    """The lid margins of the eye round ``centre`` (template frame) from the opening the
-    skin leaves as seen from the front: {"out", "in", "top", "bottom"} -> point on the
-    skin's front edge, or {} when no opening of an eye's size is there.
-
-    The opening is the connected empty part of the front-view depth map
-    (:func:`_depth_map`, skin only: an eyeball is another piece) nearest the centre, 0.15
-    to 0.6 ES wide and less tall than wide; its corners are its lateral extremes, its lid
-    middles the top and bottom of its column half way between them, each taken on the
-    skin just outside the opening (the most forward surface there: the lid margin's front
-    edge, not the hole's boundary, which can lie a fifth of an eye separation deeper)."""
-    from scipy import ndimage
-    # (tall: after the rigid fit a long face's eyes can sit a third of an eye separation
-    # below the template's)
-    half = np.array([0.4, 0.45])
-    lo = np.array([centre[0] - half[0], centre[1] - half[1], centre[2] - 0.45])
-    hi = np.array([centre[0] + half[0], centre[1] + half[1]])
-    D = _depth_map(Vt, T, lo, hi)
-    empty = np.isnan(D)
-    lab, n = ndimage.label(empty)
-    if not n:
-        return {}
-    ci = int((centre[0] - lo[0]) / DEPTH_CELL)
-    cj = int((centre[1] - lo[1]) / DEPTH_CELL)
-    best, best_d = None, np.inf
-    border = set(np.unique(np.r_[lab[0], lab[-1], lab[:, 0], lab[:, -1]]).tolist())
-    for k in range(1, n + 1):
-        if k in border:
-            continue
-        ii, jj = np.nonzero(lab == k)
-        w = (ii.max() - ii.min() + 1) * DEPTH_CELL
-        h = (jj.max() - jj.min() + 1) * DEPTH_CELL
-        if not (0.15 <= w <= 0.6 and h < w):
-            continue
-        dd = np.hypot(ii.mean() - ci, jj.mean() - cj)
-        if dd < best_d:
-            best, best_d = (ii, jj), dd
-    if best is None:
-        return {}
-    ii, jj = best
-    filled = np.where(np.isnan(D), -np.inf, D)
-
-    def front(i, j, di, dj):
-        # the first filled cell outward from (i, j), its centre at the front surface
-        for _ in range(6):
-            i, j = i + di, j + dj
-            if not (0 <= i < D.shape[0] and 0 <= j < D.shape[1]):
-                break
-            if np.isfinite(filled[i, j]):
-                return np.array([lo[0] + (i + 0.5) * DEPTH_CELL, lo[1] + (j + 0.5) * DEPTH_CELL,
-                                 filled[i, j]])
-        return None
-
-    out = {}
-    imax, imin = ii.max(), ii.min()
-    jr = int(np.round(jj[ii == imax].mean()))
-    jl = int(np.round(jj[ii == imin].mean()))
-    pr, pl = front(imax, jr, 1, 0), front(imin, jl, -1, 0)
-    # the inner corner: the lids meet medially beyond the opening, over a groove (a
-    # caruncle's pocket) that can reach a twentieth of an eye separation further; the
-    # corner is where that groove ends
-    med = -1 if left else 1
-    ic, jc = (imin, jl) if left else (imax, jr)
-    groove = _groove_end(filled, ic, jc, med)
-    if groove is not None:
-        g = np.array([lo[0] + (groove[0] + 0.5) * DEPTH_CELL,
-                      lo[1] + (groove[1] + 0.5) * DEPTH_CELL, filled[groove]])
-        if left:
-            pl = g
-        else:
-            pr = g
-    icol = int(np.round(0.5 * (imax + imin)))
-    col = jj[ii == icol]
-    if not len(col) or pr is None or pl is None:
-        return {}
-    pt, pb = front(icol, col.max(), 0, 1), front(icol, col.min(), 0, -1)
-    if pt is None or pb is None:
-        return {}
-    out["out"], out["in"] = (pr, pl) if left else (pl, pr)
-    out["top"], out["bottom"] = pt, pb
-    return out
 
 
 # -- pieces --------------------------------------------------------------------------------
@@ -1258,13 +605,13 @@ def _head_frame(skin_v: np.ndarray, tpl: _Template, ST: Optional[np.ndarray] = N
         # the nose tip sets the translation (the face fit can settle a third of an eye
         # separation up or down a long face): the first peak of the mid-plane profile
         # below the eye line that the profile then falls from like a nose
-        # (:func:`_profile_points`); without triangles, the most forward point near the
+        # (:func:`~mpeg4fba.cloning.midline.profile_points`); without triangles, the most forward point near the
         # mid line
         q = s * skin_v @ R.T + t
         tip = None
         if ST is not None:
-            prof = _profile(q, ST, 0.6, -2.5)
-            tip = _profile_points(prof, 0.0).get("9.3")
+            prof = midline.profile(q, ST, 0.6, -2.5)
+            tip = midline.profile_points(prof, 0.0).get("9.3")
         if tip is None:
             box = (np.abs(q[:, 0]) < 0.3) & (np.abs(q[:, 1] - nose_tpl[1]) < 0.8) \
                 & (q[:, 2] > nose_tpl[2] - 1.0)
@@ -1423,12 +770,12 @@ def find_feature_points(face: FaceModel, *, ids: Optional[Iterable[str]] = None)
     _face_checks(Vt, ST, score)
     # the mid-line profile's points (nose, lips), then the template's skin bent onto the
     # target's, held at them
-    prof_pts = _profile_points(_profile(Vt, ST, 0.6, -2.5), 0.0,
-                               lambda p: bool(_mouth_points(Vt, ST, p)))
-    eye_pts = _eye_points(Vt, ST, tpl)
+    prof_pts = midline.profile_points(midline.profile(Vt, ST, 0.6, -2.5), 0.0,
+                                      lambda p: bool(frontview.mouth_points(Vt, ST, p)))
+    eye_pts = frontview.eye_points(Vt, ST, tpl)
     lip_edges: dict = {}
     if "2.2" in prof_pts:
-        mouth_pts, lip_edges = _mouth(Vt, ST, 0.5 * (prof_pts["2.2"] + prof_pts["2.3"]))
+        mouth_pts, lip_edges = frontview.mouth(Vt, ST, 0.5 * (prof_pts["2.2"] + prof_pts["2.3"]))
         eye_pts.update(mouth_pts)
     X = _register(tpl, Vt, ST, {**prof_pts, **eye_pts})
     reasons: dict = {}
@@ -1514,7 +861,7 @@ def find_feature_points(face: FaceModel, *, ids: Optional[Iterable[str]] = None)
 def _register(tpl: _Template, Vt: np.ndarray, ST: np.ndarray,
               profile: Optional[dict] = None) -> np.ndarray:
     """The template's skin bent onto the target's (template frame): started from a warp
-    taking the template's mid-line profile points (:func:`_profile_points`, both
+    taking the template's mid-line profile points (:func:`~mpeg4fba.cloning.midline.profile_points`, both
     profiles read by the same rules; the nose tip alone without them) and opening
     extremes (mouth, eyes; those both have) onto the target's, which then hold loosely
     through the non-rigid registration."""
@@ -1532,7 +879,7 @@ def _register(tpl: _Template, Vt: np.ndarray, ST: np.ndarray,
         src, dst = [tip], [tpl.V[tip]]
     edge = _boundary_vertices(ST, len(Vt))
     for name, (c, lm) in tpl.openings.items():
-        if any(k in profile for k in _EYE_KEYS.get(name, ("8.3", "8.4"))):
+        if any(k in profile for k in frontview.EYE_KEYS.get(name, ("8.3", "8.4"))):
             continue                 # the eye's lid margins (mouth's corners) held already
         got = _opening_landmarks(Vt, edge, c, _opening_boxes(tpl.points)[name][1])
         if got is None:
@@ -1563,7 +910,7 @@ def _refine(Vt, ST, pos, tie, skin_ids, reasons, prof_has_tip: bool = False,
         pos["9.3"], tie["9.3"] = Vt[v], skin_ids[v]
         done.add("9.3")
     if "8.2" in pos and not prof_has_chin:
-        m = _menton(Vt, ST, {"8.2": pos["8.2"], "2.1": pos["2.1"]})
+        m = midline.menton(Vt, ST, {"8.2": pos["8.2"], "2.1": pos["2.1"]})
         if np.linalg.norm(m - pos["2.1"]) < 0.5:
             v = int(np.argmin(np.linalg.norm(Vt - m, axis=1)))
             pos["2.1"], tie["2.1"] = Vt[v], skin_ids[v]
@@ -1702,7 +1049,7 @@ def _teeth_row(centre: np.ndarray, upper: np.ndarray, lower: np.ndarray,
 
 
 #: Each pupil's eye opening: its corners and lid middles.
-PUPIL_OPENINGS = {"3.5": _EYE_KEYS["left eye"], "3.6": _EYE_KEYS["right eye"]}
+PUPIL_OPENINGS = {"3.5": frontview.EYE_KEYS["left eye"], "3.6": frontview.EYE_KEYS["right eye"]}
 
 
 def _pupils_in_openings(pos, resid, reasons) -> tuple:
@@ -1747,113 +1094,3 @@ def _confidence(pos, resid, crisp_ok, reasons) -> dict:
             reasons[k] = (f"registration residual {r:.3f} ES near it" if fit < 0.7 else
                           "its left/right partner does not mirror it")
     return out
-
-
-def snap_points(face: FaceModel, points: FeaturePointSet, ids=SNAP_POINTS, *,
-                found: Optional[FoundPoints] = None, source: Optional[FaceModel] = None,
-                source_found: Optional[FoundPoints] = None) -> tuple:
-    """(snapped FeaturePointSet, id -> distance moved in model units): the given points
-    among ``ids`` moved onto the geometry found near them (within a quarter of the eye
-    separation; further, the given point is kept: the user knows better).
-
-    Crisp points (:data:`CRISP_POINTS`) go to the points found.  The inner lips' points
-    (:data:`LIP_EDGE_POINTS`) go across the slit only: to the nearest point of their
-    lip's edge, keeping where along the lip they were given, then by as much as the
-    ``source`` face's own point of that id lies off its lip's edge (measured in each
-    face's head frame, in eye separations, then dropped onto the lip's sheet), so that
-    the target's points agree with the source's as cloning needs.  Without a source
-    they stay on the edge, which is where the reference head has them.
-    ``found`` / ``source_found``: :func:`find_feature_points` of ``face`` / ``source``
-    when the caller has it already.
-
-    >>> from mpeg4fba.models import reference_head
-    >>> head = reference_head(resolution=0.5)
-    >>> off = dict(head.points.items()); off["2.6"] = off["2.6"] + [0, 0.003, 0]  # 3 mm up
-    >>> snapped, moved = snap_points(head, FeaturePointSet(off), ids=["2.6"])
-    >>> 2.5e-3 < moved["2.6"] < 3.5e-3, bool(abs(snapped["2.6"][1] - head.points["2.6"][1]) < 1e-3)
-    (True, True)
-    """
-    found = find_feature_points(face) if found is None else found
-    pos = {k: points[k] for k in points}
-    ties = dict(points.vertices)
-    es = None
-    if "3.5" in points and "3.6" in points:
-        es = float(np.linalg.norm(points["3.5"] - points["3.6"]))
-    if not es:
-        es = TEMPLATE_ES_MM * found.scale
-    if source is not None and source_found is None:
-        try:
-            source_found = find_feature_points(source)
-        except FaceNotFoundError:
-            source = None
-    moved = {}
-    for k in ids:
-        k = normalise_id(k)
-        if k not in pos:
-            continue
-        if k in LIP_EDGE_POINTS:
-            to, tie = _across_the_slit(face, found, k, pos[k], source, source_found)
-            if to is None:
-                continue
-        elif k in found.points:
-            to, tie = found.points[k], found.points.vertex(k)
-        else:
-            continue
-        d = float(np.linalg.norm(to - pos[k]))
-        if d <= 0.25 * es:
-            pos[k] = to
-            if tie is not None:
-                ties[k] = tie
-            moved[k] = d
-    return FeaturePointSet(pos, ties), moved
-
-
-#: Each lip's inner contour through the found points, right corner to left: its edge
-#: where the geometry shows no contact groove (a coarse or smooth mouth).
-_LIP_CHAINS = {"upper lip": ("2.5", "2.7", "2.2", "2.6", "2.4"),
-               "lower lip": ("2.5", "2.9", "2.3", "2.8", "2.4")}
-
-
-def _lip_edge(found: FoundPoints, name: str) -> Optional[np.ndarray]:
-    """The lip's edge found (``found.curves``), else its contour through the found
-    points, else None."""
-    if name in found.curves:
-        return found.curves[name]
-    chain = _LIP_CHAINS[name]
-    if all(k in found.points for k in chain):
-        return np.array([found.points[k] for k in chain])
-    return None
-
-
-def _across_the_slit(face: FaceModel, found: FoundPoints, k: str, p: np.ndarray,
-                     source: Optional[FaceModel], source_found: Optional[FoundPoints]) -> tuple:
-    """(where :func:`snap_points` puts the inner lip point ``k`` given at ``p``, its
-    (mesh, vertex) tie), or (None, None) without the lip's edge or its mesh."""
-    edge = _lip_edge(found, LIP_EDGE_POINTS[k])
-    mesh = (found.points.vertices.get("2.2") or (None,))[0]
-    if edge is None or mesh not in face.meshes:
-        return None, None
-    on = _nearest_on_polyline(p, edge)
-    to = on
-    if source is not None and source_found is not None and k in source.points:
-        src_edge = _lip_edge(source_found, LIP_EDGE_POINTS[k])
-        if src_edge is not None:
-            q = np.asarray(source.points[k])
-            # the source's offset in its head frame (eye separations), then in the face's
-            off = source_found.fit["s"] * (q - _nearest_on_polyline(q, src_edge)) @ source_found.fit["R"].T
-            to = on + off @ found.fit["R"] / found.fit["s"]
-    V = face.world_vertices(mesh)
-    T = face.meshes[mesh].triangles
-    # onto the sheet of the lip whose edge it is (a surface facing away counts a tenth
-    # of an eye separation further)
-    tri, bary = onto_same_sheet(on[None], to[None], V, T, 0.1 / found.fit["s"])
-    return bary[0] @ V[T[tri[0]]], (mesh, int(T[tri[0], np.argmax(bary[0])]))
-
-
-def _nearest_on_polyline(p: np.ndarray, line: np.ndarray) -> np.ndarray:
-    """The point of the polyline ``line`` (k, 3) nearest ``p``."""
-    a, b = line[:-1], line[1:]
-    ab = b - a
-    t = np.clip(((p - a) * ab).sum(axis=1) / np.maximum((ab * ab).sum(axis=1), 1e-300), 0, 1)
-    near = a + t[:, None] * ab
-    return near[np.argmin(np.linalg.norm(near - p, axis=1))]

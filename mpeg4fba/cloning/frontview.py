@@ -1,0 +1,380 @@
+"""The skin seen from the front: depth maps of the detector's template frame (x the
+face's left, y up, z forward; units of the eye separation), and the openings read off
+them: each eye's lid margins (corners and lid middles) and the lips' contact groove with
+the mouth's corners and inner-lip points (steps 5 and 6 of
+:mod:`mpeg4fba.cloning.detect`).
+
+>>> V = np.array([[-1.0, -1.0, 0.0], [1.0, -1.0, 0.0], [1.0, 1.0, 0.5], [-1.0, 1.0, 0.5]])
+>>> T = np.array([[0, 1, 2], [0, 2, 3]])
+>>> front_at(V, T, np.array([[0.0, 0.0], [0.0, 0.5], [3.0, 0.0]])).round(3).tolist()
+[0.25, 0.375, nan]
+"""
+from __future__ import annotations
+
+from typing import Optional
+
+import numpy as np
+
+__all__ = ["depth_map", "front_at", "groove", "mouth", "mouth_points", "eye_points",
+           "eye_opening", "DEPTH_CELL", "INNER_CORNER", "EYE_KEYS", "INNER_CANTHAL_RATIO",
+           "INNER_CANTHAL_LIMIT"]
+
+
+#: Cell size (eye separations) of the front-view depth maps of the eyes: 0.01 ES.
+DEPTH_CELL = 0.01
+
+
+def depth_map(Vt: np.ndarray, T: np.ndarray, lo: np.ndarray, hi: np.ndarray,
+              cell: float = DEPTH_CELL) -> np.ndarray:
+    """The skin seen from the front (+z) in the box ``lo``..``hi`` (template frame):
+    (nx, ny) grid of the most forward z of the triangles over each cell centre, NaN where
+    no triangle is.  Each triangle in the box is sampled on a barycentric lattice fine
+    enough for the cell size (its longest edge over half a cell), so a decimated mesh's
+    large triangles leave no gaps."""
+    nx = int(np.ceil((hi[0] - lo[0]) / cell))
+    ny = int(np.ceil((hi[1] - lo[1]) / cell))
+    out = np.full((nx, ny), -np.inf)
+    P = Vt[T]                                             # (m, 3, 3)
+    inb = ((P[:, :, 0].max(1) >= lo[0]) & (P[:, :, 0].min(1) <= hi[0])
+           & (P[:, :, 1].max(1) >= lo[1]) & (P[:, :, 1].min(1) <= hi[1])
+           & (P[:, :, 2].max(1) >= lo[2]))
+    P = P[inb]
+    if not len(P):
+        return np.full((nx, ny), np.nan)
+    edge = np.linalg.norm(P - P[:, [1, 2, 0]], axis=2).max(1)
+    nsub = np.clip(np.ceil(edge / (0.5 * cell)).astype(int), 1, 64)
+    for n in np.unique(nsub):
+        tri = P[nsub == n]
+        i, j = np.meshgrid(np.arange(n + 1), np.arange(n + 1), indexing="ij")
+        keep = i + j <= n
+        a, b = i[keep] / n, j[keep] / n
+        w = np.c_[1 - a - b, a, b]                        # (k, 3)
+        Q = np.einsum("kv,mvc->mkc", w, tri).reshape(-1, 3)
+        ix = np.floor((Q[:, 0] - lo[0]) / cell).astype(int)
+        iy = np.floor((Q[:, 1] - lo[1]) / cell).astype(int)
+        ok = (ix >= 0) & (ix < nx) & (iy >= 0) & (iy < ny) & (Q[:, 2] >= lo[2])
+        np.maximum.at(out, (ix[ok], iy[ok]), Q[ok, 2])
+    out[~np.isfinite(out)] = np.nan
+    return out
+
+
+def front_at(Vt: np.ndarray, T: np.ndarray, xy: np.ndarray) -> np.ndarray:
+    """(k,) the most forward z of the skin over each point ``xy`` (k, 2) (template frame),
+    NaN where no triangle is over it."""
+    P = Vt[T]
+    out = np.full(len(xy), np.nan)
+    lo, hi = P[:, :, :2].min(1), P[:, :, :2].max(1)
+    for n, q in enumerate(xy):
+        m = np.flatnonzero(np.all((lo <= q) & (hi >= q), axis=1))
+        if not len(m):
+            continue
+        a, b, c = P[m, 0], P[m, 1], P[m, 2]
+        v0, v1, v2 = b[:, :2] - a[:, :2], c[:, :2] - a[:, :2], q - a[:, :2]
+        den = v0[:, 0] * v1[:, 1] - v1[:, 0] * v0[:, 1]
+        ok = np.abs(den) > 1e-15
+        den = np.where(ok, den, 1.0)
+        u = (v2[:, 0] * v1[:, 1] - v1[:, 0] * v2[:, 1]) / den
+        v = (v0[:, 0] * v2[:, 1] - v2[:, 0] * v0[:, 1]) / den
+        inside = ok & (u >= -1e-9) & (v >= -1e-9) & (u + v <= 1 + 1e-9)
+        if inside.any():
+            z = (a[:, 2] + u * (b[:, 2] - a[:, 2]) + v * (c[:, 2] - a[:, 2]))[inside]
+            out[n] = z.max()
+    return out
+
+
+#: Where Multi-PIE's inner lip corners (landmarks 60/64, MPEG-4 2.4/2.5) lie on a closed
+#: mouth, as a fraction of the way from the mid line to the commissure along the lips'
+#: contact groove: 0.875 (the inner corners sit an eighth of the mouth's half width
+#: inside the commissures: 0.86-0.89 on ICT-FaceKit identities, measured on the mean
+#: face and four random identities; a closed mouth's contact line has no geometric mark
+#: there, and a slit between the lips seen from the front ends anywhere from a third to
+#: two thirds of the way out, so it marks nothing either).
+INNER_CORNER = 0.875
+
+
+def groove(D: np.ndarray, i: int, j: int, step: int, reach: int = 3,
+           depth: float = 0.01, slack: int = 3, contrast: bool = False) -> list:
+    """The cells (i, j) of the groove of the depth map ``D`` (front-view z, -inf where
+    empty) followed from (i, j) along x (``step`` = +-1): at each column the deepest cell
+    within two cells of the last one's height (an empty cell is deepest: an opening), or
+    with ``contrast`` the one lying deepest behind the mean of the cells ``reach`` rows
+    above and below it (an empty cell most of all).  A
+    column is strong where that cell lies ``depth`` (0.01 ES, 0.6 mm) or more behind the
+    mean of the cells ``reach`` rows above and below it, faint where less than half that
+    (the smooth skin beyond the groove's end).  The groove is followed through columns
+    between the two (a lip line that runs shallow for a stretch: a smooth model's lips
+    meet 0.009-0.010 ES deep near the mid line) and across up to ``slack`` faint ones in a
+    row (a decimated mesh's facets make a shallow groove flicker); it ends at its last
+    strong cell, and is [] unless half its columns or more are strong."""
+    out, pending, faint, strong = [], [], 0, 0
+    ny = D.shape[1]
+    for _ in range(D.shape[0]):
+        i += step
+        if not 0 <= i < D.shape[0]:
+            break
+        js = np.arange(max(j - 2, reach), min(j + 3, ny - reach))
+        if not len(js):
+            break
+        # each candidate's depth behind the mean of its rows ``reach`` above and below
+        # (an empty cell: infinitely deep; a neighbour missing: not a groove)
+        z, up, dn = D[i, js], D[i, js + reach], D[i, js - reach]
+        with np.errstate(invalid="ignore"):
+            cs = np.where(~np.isfinite(z), np.inf,
+                          np.where(np.isfinite(up) & np.isfinite(dn), 0.5 * (up + dn) - z, -np.inf))
+        k = int(np.argmax(cs)) if contrast else int(np.argmin(z))
+        jb, c = int(js[k]), float(cs[k])
+        if c >= depth:
+            out.extend(pending)
+            out.append((i, jb))
+            pending, faint = [], 0
+            strong += 1
+        else:
+            pending.append((i, jb))
+            faint = faint + 1 if c < 0.5 * depth else 0
+            if faint > slack:
+                break
+        j = jb
+    return out if 2 * strong >= len(out) else []
+
+
+def mouth_points(Vt: np.ndarray, T: np.ndarray, stomion: np.ndarray) -> dict:
+    """The mouth's points of :func:`mouth` (without the lips' edges)."""
+    return mouth(Vt, T, stomion)[0]
+
+
+def mouth(Vt: np.ndarray, T: np.ndarray, stomion: np.ndarray) -> tuple:
+    """(points, lip edges): the mouth's corners from the lips' contact groove seen from the front (template
+    frame): the groove (:func:`groove`) of the skin's depth map followed from the
+    stomion (the profile's lips' meeting) to each side; its ends are the commissures
+    (8.3, 8.4: the outer corners); the inner corners (2.4, 2.5) are the groove's points
+    :data:`INNER_CORNER` of the way out; 2.6-2.9 (the inner lips'
+    midpoints) on the groove half way to the inner corners: its edges above and below
+    where it is open there, a cell (0.01 ES) above and below its bottom where closed.
+    The lip edges, "upper lip" and "lower lip", are the (k, 3) polylines so taken at
+    every column of the groove, from the right corner to the left: where each lip meets
+    the other or ends at the opening, seen from the front.  ({}, {}) without a groove a
+    mouth's width (0.45 to 1.4 ES) whose ends lie symmetrically about the mid line
+    (within 15 % of its width)."""
+    lo = np.array([-0.75, stomion[1] - 0.2, stomion[2] - 0.6])
+    hi = np.array([0.75, stomion[1] + 0.2])
+    D = depth_map(Vt, T, lo, hi)
+    F = np.where(np.isnan(D), -np.inf, D)
+    i0 = int((0.0 - lo[0]) / DEPTH_CELL)
+    j0 = int((stomion[1] - lo[1]) / DEPTH_CELL)
+    # the deepest cells followed; where that gives no mouth, the cells deepest against
+    # their neighbours above and below (a coarse lower lip's facet sloping back below
+    # the groove can lead the deepest-cell walk off it: a fresh ICT draw, seed 2045, had
+    # its mouth read in the lower lip's fold so).  Not first: on the regression draw's
+    # decimated heads it puts the corners further off (mouth corners' max 6.1 -> 12.8).
+    for contrast in (False, True):
+        sides = {}
+        for name, step in (("left", 1), ("right", -1)):
+            g = groove(F, i0, j0, step, contrast=contrast)
+            if g:
+                sides[name] = g
+        if len(sides) < 2:
+            continue
+        width = (sides["left"][-1][0] - sides["right"][-1][0]) * DEPTH_CELL
+        skew = (sides["left"][-1][0] + sides["right"][-1][0] - 2 * i0) * DEPTH_CELL
+        if 0.45 <= width <= 1.4 and abs(skew) <= 0.15 * width:
+            break
+    else:
+        return {}, {}
+    cx = lambda i: lo[0] + (i + 0.5) * DEPTH_CELL
+    cy = lambda j: lo[1] + (j + 0.5) * DEPTH_CELL
+
+    def at(i, j, dj=0):
+        # the surface point at cell (i, j): its depth, or the first filled cell in dj
+        while not np.isfinite(F[i, j]) and dj and 0 <= j + dj < F.shape[1]:
+            j += dj
+        return np.array([cx(i), cy(j), F[i, j]]) if np.isfinite(F[i, j]) else None
+
+    out = {}
+    for name, (outer, inner, up, dn) in (("left", ("8.3", "2.4", "2.6", "2.8")),
+                                         ("right", ("8.4", "2.5", "2.7", "2.9"))):
+        g = sides[name]
+        ie, je = g[-1]
+        p = at(ie, je)
+        if p is not None:
+            out[outer] = p
+        # (not the end of an opening seen from the front: lips modelled as two sheets
+        # leave a slit a third to two thirds of the way out, and ICT's inner corners stay
+        # 0.045-0.055 ES inside the commissures whether or not it is there)
+        k = int(np.argmin([abs(abs(cx(i)) - INNER_CORNER * abs(cx(ie))) for i, _ in g]))
+        ic, jc = g[k]
+        p = at(ic, jc, 1) if not np.isfinite(F[ic, jc]) else at(ic, jc)
+        if p is not None:
+            out[inner] = p
+        # half way along the groove (arc length, in 3D) to the inner corner
+        pts = [at(i, j, 1) for i, j in g[:k + 1]]
+        ok = [q is not None for q in pts]
+        Q = np.array([q for q in pts if q is not None])
+        if len(Q) < 2:
+            continue
+        arc = np.r_[0, np.cumsum(np.linalg.norm(np.diff(Q, axis=0), axis=1))]
+        h = int(np.flatnonzero(ok)[np.argmin(np.abs(arc - 0.5 * arc[-1]))])
+        ih, jh = g[h]
+        if np.isfinite(F[ih, jh]):
+            # closed there: a cell off the groove's bottom, on each lip (the bottom itself
+            # is where both lips touch, and a point there belongs to neither)
+            pu, pd = at(ih, jh + 1), at(ih, jh - 1)
+        else:
+            pu, pd = at(ih, jh, 1), at(ih, jh, -1)
+        if pu is not None and pd is not None:
+            out[up], out[dn] = pu, pd
+    edges: dict = {"upper lip": [], "lower lip": []}
+    for i, j in sides["right"][::-1] + sides["left"]:
+        closed = np.isfinite(F[i, j])
+        for name, dj in (("upper lip", 1), ("lower lip", -1)):
+            p = at(i, j + dj) if closed else at(i, j, dj)
+            if p is not None:
+                edges[name].append(p)
+    return out, {k: np.array(v) for k, v in edges.items() if len(v) >= 2}
+
+
+#: Each eye's lid-margin points: outer corner, inner corner, upper and lower lid middles.
+EYE_KEYS = {"left eye": ("3.7", "3.11", "3.1", "3.3"), "right eye": ("3.12", "3.8", "3.2", "3.4")}
+
+
+#: The inner canthi's distance over the outer canthi's (3.11-3.8 over 3.7-3.12): 0.412 on
+#: 40 random ICT-FaceKit identities (sd 0.023, range 0.36-0.45); adult anthropometry
+#: gives 0.35-0.37 (about 32 mm between the inner canthi, 90 mm between the outer).
+INNER_CANTHAL_RATIO = 0.41
+#: An eye opening that ends further from the mid line than this fraction of its outer
+#: corner's distance is not the whole eye (4 sd above the ICT mean, far above people's):
+#: a coarse mesh's triangles bridge the lids near the inner corner, and the opening seen
+#: from the front stops up to 0.15 eye separations short of it.  The corner then goes at
+#: :data:`INNER_CANTHAL_RATIO` of the way.
+INNER_CANTHAL_LIMIT = 0.5
+
+
+def eye_points(Vt: np.ndarray, T: np.ndarray, tpl) -> dict:
+    """The lid-margin points of both eyes (:func:`eye_opening`), each eye searched round
+    where the template's eye lies after the rigid fit; an eye without an opening of an
+    eye's size there gives none.  An inner corner too far out for an eye
+    (:data:`INNER_CANTHAL_LIMIT`) is put where the canthi's proportion puts it, on the
+    skin's front at the opening's end's height."""
+    out = {}
+    for name, keys in EYE_KEYS.items():
+        c = 0.5 * (tpl.points[keys[0]] + tpl.points[keys[1]])
+        got = eye_opening(Vt, T, c, name == "left eye")
+        if "in" in got and abs(got["in"][0]) > INNER_CANTHAL_LIMIT * abs(got["out"][0]):
+            xy = np.array([np.sign(got["out"][0]) * INNER_CANTHAL_RATIO * abs(got["out"][0]),
+                           got["in"][1]])
+            z = front_at(Vt, T, xy[None])[0]
+            if np.isfinite(z):
+                got["in"] = np.array([*xy, z])
+        out.update({k: got[r] for k, r in zip(keys, ("out", "in", "top", "bottom")) if r in got})
+    return out
+
+
+def _groove_end(D: np.ndarray, i: int, j: int, step: int, reach: int = 3,
+                depth: float = 0.01) -> Optional[tuple]:
+    """Following the groove of the depth map ``D`` (front-view z, -inf where empty) from
+    the opening's extreme cell (i, j) outward along x (``step`` = +-1): at each column the
+    deepest cell within two cells of the last one's height, kept while it lies ``depth``
+    (0.01 ES, 0.6 mm) or more behind the mean of the cells ``reach`` rows above and below
+    it (a groove, not the smooth skin beyond the corner), for 0.07 ES at most (a
+    caruncle's pocket reaches 0.04-0.06 ES; on a coarse mesh the side of the nose can
+    look like a groove going on); the last groove cell, or None."""
+    last = None
+    ny = D.shape[1]
+    for _ in range(int(0.07 / DEPTH_CELL)):
+        i += step
+        if not 0 <= i < D.shape[0]:
+            break
+        js = np.arange(max(j - 2, reach), min(j + 3, ny - reach))
+        if not len(js):
+            break
+        col = D[i, js]
+        if not np.isfinite(col).any():
+            continue                      # still in the opening
+        jb = int(js[np.argmax(np.where(np.isfinite(col), -col, -np.inf))])
+        z, up, dn = D[i, jb], D[i, jb + reach], D[i, jb - reach]
+        if not (np.isfinite(up) and np.isfinite(dn)) or 0.5 * (up + dn) - z < depth:
+            break
+        last, j = (i, jb), jb
+    return last
+
+
+def eye_opening(Vt: np.ndarray, T: np.ndarray, centre: np.ndarray, left: bool) -> dict:
+    """The lid margins of the eye round ``centre`` (template frame) from the opening the
+    skin leaves as seen from the front: {"out", "in", "top", "bottom"} -> point on the
+    skin's front edge, or {} when no opening of an eye's size is there.
+
+    The opening is the connected empty part of the front-view depth map
+    (:func:`depth_map`, skin only: an eyeball is another piece) nearest the centre, 0.15
+    to 0.6 ES wide and less tall than wide; its corners are its lateral extremes, its lid
+    middles the top and bottom of its column half way between them, each taken on the
+    skin just outside the opening (the most forward surface there: the lid margin's front
+    edge, not the hole's boundary, which can lie a fifth of an eye separation deeper)."""
+    from scipy import ndimage
+    # (tall: after the rigid fit a long face's eyes can sit a third of an eye separation
+    # below the template's)
+    half = np.array([0.4, 0.45])
+    lo = np.array([centre[0] - half[0], centre[1] - half[1], centre[2] - 0.45])
+    hi = np.array([centre[0] + half[0], centre[1] + half[1]])
+    D = depth_map(Vt, T, lo, hi)
+    empty = np.isnan(D)
+    lab, n = ndimage.label(empty)
+    if not n:
+        return {}
+    ci = int((centre[0] - lo[0]) / DEPTH_CELL)
+    cj = int((centre[1] - lo[1]) / DEPTH_CELL)
+    best, best_d = None, np.inf
+    border = set(np.unique(np.r_[lab[0], lab[-1], lab[:, 0], lab[:, -1]]).tolist())
+    for k in range(1, n + 1):
+        if k in border:
+            continue
+        ii, jj = np.nonzero(lab == k)
+        w = (ii.max() - ii.min() + 1) * DEPTH_CELL
+        h = (jj.max() - jj.min() + 1) * DEPTH_CELL
+        if not (0.15 <= w <= 0.6 and h < w):
+            continue
+        dd = np.hypot(ii.mean() - ci, jj.mean() - cj)
+        if dd < best_d:
+            best, best_d = (ii, jj), dd
+    if best is None:
+        return {}
+    ii, jj = best
+    filled = np.where(np.isnan(D), -np.inf, D)
+
+    def front(i, j, di, dj):
+        # the first filled cell outward from (i, j), its centre at the front surface
+        for _ in range(6):
+            i, j = i + di, j + dj
+            if not (0 <= i < D.shape[0] and 0 <= j < D.shape[1]):
+                break
+            if np.isfinite(filled[i, j]):
+                return np.array([lo[0] + (i + 0.5) * DEPTH_CELL, lo[1] + (j + 0.5) * DEPTH_CELL,
+                                 filled[i, j]])
+        return None
+
+    out = {}
+    imax, imin = ii.max(), ii.min()
+    jr = int(np.round(jj[ii == imax].mean()))
+    jl = int(np.round(jj[ii == imin].mean()))
+    pr, pl = front(imax, jr, 1, 0), front(imin, jl, -1, 0)
+    # the inner corner: the lids meet medially beyond the opening, over a groove (a
+    # caruncle's pocket) that can reach a twentieth of an eye separation further; the
+    # corner is where that groove ends
+    med = -1 if left else 1
+    ic, jc = (imin, jl) if left else (imax, jr)
+    groove = _groove_end(filled, ic, jc, med)
+    if groove is not None:
+        g = np.array([lo[0] + (groove[0] + 0.5) * DEPTH_CELL,
+                      lo[1] + (groove[1] + 0.5) * DEPTH_CELL, filled[groove]])
+        if left:
+            pl = g
+        else:
+            pr = g
+    icol = int(np.round(0.5 * (imax + imin)))
+    col = jj[ii == icol]
+    if not len(col) or pr is None or pl is None:
+        return {}
+    pt, pb = front(icol, col.max(), 0, 1), front(icol, col.min(), 0, -1)
+    if pt is None or pb is None:
+        return {}
+    out["out"], out["in"] = (pr, pl) if left else (pl, pr)
+    out["top"], out["bottom"] = pt, pb
+    return out

@@ -241,6 +241,22 @@ def test_lips_parted_by_a_hole_are_told_apart_by_its_rims():
     assert (holed[lips & ~gone] == got[lips & ~gone]).all()
 
 
+def test_the_rims_field_is_held_at_0_at_the_holes_corners_only():
+    """Round a corner the band's field is held at 0 at the vertex nearest the corner
+    point; the rims' field only at the hole's own ends.  Lower-lip vertices near a
+    corner aligned 0.07 above the mid line (as misplaced points put them) stay on the
+    lower lip: held at 0 there too, the field round them stayed under the rims'
+    confidence and 4 of them kept the band's answer."""
+    xyz, tris, pts = _mouth_with_a_hole()
+    uv = xyz[:, :2].copy()
+    moved = (uv[:, 0] >= 0.15) & (uv[:, 0] <= 0.3) & (uv[:, 1] < 0) & (uv[:, 1] > -0.1)
+    uv[moved, 1] += 0.07
+    lower = (xyz[:, 0] > 0.1) & (xyz[:, 0] < 0.28) & (xyz[:, 1] < 0) & (xyz[:, 1] > -0.12)
+    assert (lip_regions(uv, pts)[lower] != LOWER).sum() > 10     # the polygons alone
+    got = lip_regions(uv, pts, triangles=tris, vertices=xyz)
+    assert (got[lower] == LOWER).all()
+
+
 def _strip(profile, xs=(0.0, 0.05, 0.1, 0.15)) -> tuple:
     """(vertices, triangles) of a strip extruded along x from a (y, z) polyline, its
     normals towards +z where the polyline runs down (-y) at constant z."""

@@ -92,6 +92,17 @@ def front_at(Vt: np.ndarray, T: np.ndarray, xy: np.ndarray) -> np.ndarray:
 INNER_CORNER = 0.875
 
 
+def _rows_near(D: np.ndarray, i: int, j: int, reach: int) -> Optional[np.ndarray]:
+    """The rows a groove walk weighs in column ``i`` of the depth map ``D``: within two
+    of the last cell's row ``j`` and ``reach`` or more from the map's top and bottom (a
+    cell's neighbours ``reach`` above and below must exist); None past the map's side
+    or with no such row."""
+    if not 0 <= i < D.shape[0]:
+        return None
+    js = np.arange(max(j - 2, reach), min(j + 3, D.shape[1] - reach))
+    return js if len(js) else None
+
+
 def groove(D: np.ndarray, i: int, j: int, step: int, reach: int = 3,
            depth: float = 0.01, slack: int = 3, contrast: bool = False) -> list:
     """The cells (i, j) of the groove of the depth map ``D`` (front-view z, -inf where
@@ -107,13 +118,10 @@ def groove(D: np.ndarray, i: int, j: int, step: int, reach: int = 3,
     row (a decimated mesh's facets make a shallow groove flicker); it ends at its last
     strong cell, and is [] unless half its columns or more are strong."""
     out, pending, faint, strong = [], [], 0, 0
-    ny = D.shape[1]
     for _ in range(D.shape[0]):
         i += step
-        if not 0 <= i < D.shape[0]:
-            break
-        js = np.arange(max(j - 2, reach), min(j + 3, ny - reach))
-        if not len(js):
+        js = _rows_near(D, i, j, reach)
+        if js is None:
             break
         # each candidate's depth behind the mean of its rows ``reach`` above and below
         # (an empty cell: infinitely deep; a neighbour missing: not a groove)
@@ -278,13 +286,10 @@ def _groove_end(D: np.ndarray, i: int, j: int, step: int, reach: int = 3,
     caruncle's pocket reaches 0.04-0.06 ES; on a coarse mesh the side of the nose can
     look like a groove going on); the last groove cell, or None."""
     last = None
-    ny = D.shape[1]
     for _ in range(int(0.07 / DEPTH_CELL)):
         i += step
-        if not 0 <= i < D.shape[0]:
-            break
-        js = np.arange(max(j - 2, reach), min(j + 3, ny - reach))
-        if not len(js):
+        js = _rows_near(D, i, j, reach)
+        if js is None:
             break
         col = D[i, js]
         if not np.isfinite(col).any():

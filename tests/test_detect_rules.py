@@ -11,6 +11,7 @@ import pytest
 
 from mpeg4fba.cloning import detect as D
 from mpeg4fba.cloning import frontview as F
+from mpeg4fba.cloning import headframe as H
 from mpeg4fba.cloning import midline as M
 
 
@@ -93,7 +94,7 @@ def test_mid_plane_search_keeps_the_frame_of_a_face_too_flat_across():
     # must not run away
     V, T = _grid(np.arange(-1, 1, 0.05), np.arange(-2, 0.6, 0.02),
                  lambda X, Y: _face_profile(Y) + 0 * X)
-    A, b = D._mid_plane(V, T)
+    A, b = H.mid_plane(V, T)
     assert np.degrees(np.arccos(np.clip(A[0, 0], -1, 1))) < 10.5
 
 
@@ -167,9 +168,9 @@ def test_a_lower_lip_behind_the_chins_rise_is_still_the_lower_lip():
 
 def test_mid_plane_found_for_a_turned_shifted_symmetric_face():
     V, T = _face(resolution=0.02)
-    turn = D._turn(np.array([0.0, 1.0, 0.0]), np.radians(4.0))
+    turn = H.rotation(np.array([0.0, 1.0, 0.0]), np.radians(4.0))
     W = V @ turn.T + [0.04, 0.0, 0.0]
-    A, b = D._mid_plane(W, T)
+    A, b = H.mid_plane(W, T)
     back = W @ A.T + b
     # the nose tip, off the plane by 0.04 + 2 * sin(4 deg) before, is on it after
     tip = back[np.argmax(back[:, 2])]

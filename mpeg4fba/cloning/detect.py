@@ -3,31 +3,35 @@
 
 Route (each step a function below), the face's structure found in order:
 
-1. **Pieces** (:func:`_pieces`): every mesh cut into connected components; the skin is the
-   component of the largest area, the others are candidate parts (eyeballs, teeth,
-   tongue, lashes...).
-2. **Head frame** (:func:`_head_frame`): the reference head's skin
-   (:func:`mpeg4fba.models.reference_head`, the template, which carries all 84 points) is
+Steps 1-3 are :mod:`~mpeg4fba.cloning.headframe`'s, 4 :mod:`~mpeg4fba.cloning.midline`'s,
+5 and 6 :mod:`~mpeg4fba.cloning.frontview`'s.
+
+1. **Pieces** (:func:`~mpeg4fba.cloning.headframe.pieces`): every mesh cut into
+   connected components; the skin is the component of the largest area, the others are
+   candidate parts (eyeballs, teeth, tongue, lashes...).
+2. **Head frame** (:func:`~mpeg4fba.cloning.headframe.head_frame`): the reference head's
+   skin (:func:`mpeg4fba.models.reference_head`, the template, which carries all 84 points) is
    fitted to the target's skin by a trimmed, two-way similarity ICP (rotation, translation,
    one scale) from each of the 24 axis-aligned up/forward hypotheses; the best fit is
    kept, which also tilts it into place (faces up to 20 degrees off an axis).  The nose
    tip read off the mid-plane profile (step 4) then sets the translation.
-3. **Is it a face** (:func:`_face_checks`): the fit must be close, the skin bilaterally
-   symmetric about the fitted mid plane, and a nose must stand out; else
-   :class:`FaceNotFoundError` says which was missing.  **Mid plane** (:func:`_mid_plane`):
-   the plane of the skin's mirror symmetry, by a point-to-plane mirror fit, turned to
-   x = 0.
-4. **Mid line** (:func:`~mpeg4fba.cloning.midline.profile`, :func:`~mpeg4fba.cloning.midline.profile_points`): the front of the skin's cut by
+3. **Is it a face** (:func:`~mpeg4fba.cloning.headframe.face_checks`): the fit must be
+   close, the skin bilaterally symmetric about the fitted mid plane, and a nose must
+   stand out; else :class:`FaceNotFoundError` says which was missing.  **Mid plane**
+   (:func:`~mpeg4fba.cloning.headframe.mid_plane`): the plane of the skin's mirror
+   symmetry, by a point-to-plane mirror fit, turned to x = 0.
+4. **Mid line** (:func:`~mpeg4fba.cloning.midline.profile`,
+   :func:`~mpeg4fba.cloning.midline.profile_points`): the front of the skin's cut by
    the mid plane, read from the eye line down: the nose tip (the first peak that falls
    like a nose: an upper lip as forward as the nose is never taken for it), subnasale,
    the upper lip's front, the lips' meeting (a crease or a parting; the crease from which
    a groove runs the mouth's width), the lower lip's vermilion edge, the menton.
-5. **Eyes** (:func:`~mpeg4fba.cloning.frontview.eye_opening`): each eye's opening seen from the front (a depth map of
-   the skin, :func:`~mpeg4fba.cloning.frontview.depth_map`: a hole, or the skin's edge round an eyeball that is
-   another piece): corners at its lateral ends (the inner one where the groove beyond it
+5. **Eyes** (:func:`~mpeg4fba.cloning.frontview.eye_opening`): each eye's opening seen
+   from the front (a depth map of the skin, :func:`~mpeg4fba.cloning.frontview.depth_map`:
+   a hole, or the skin's edge round an eyeball that is another piece): corners at its lateral ends (the inner one where the groove beyond it
    ends), lid middles at its top and bottom, on the lid margin's front edge.
-6. **Mouth** (:func:`~mpeg4fba.cloning.frontview.mouth_points`): the lips' contact groove seen from the front,
-   followed from the stomion: commissures at its ends, inner corners and inner-lip
+6. **Mouth** (:func:`~mpeg4fba.cloning.frontview.mouth_points`): the lips' contact
+   groove seen from the front, followed from the stomion: commissures at its ends, inner corners and inner-lip
    midpoints along it.
 7. **Registration**: the template's skin is bent onto the target's
    (:func:`~mpeg4fba.cloning.registration.register_surface`, coarse to fine), held at the
@@ -50,7 +54,8 @@ Chin convention: 2.1 ("bottom of the chin") is the *menton*, the lowest point of
 on the mid line as seen from the front (the lowest point of the jaw line of a face photo,
 Multi-PIE landmark 8), where the chin's profile turns from facing forward to facing down:
 on the mid-plane profile, walking back up from under the chin, the first point where the
-profile is no steeper than 45 degrees (:func:`~mpeg4fba.cloning.midline.profile_points`; :func:`~mpeg4fba.cloning.midline.menton`, the
+profile is no steeper than 45 degrees (:func:`~mpeg4fba.cloning.midline.profile_points`;
+:func:`~mpeg4fba.cloning.midline.menton`, the
 same by the surface normals, when the profile has no chin).  The reference head's own 2.1
 lies further back, under the jaw; the landmark convention is what users (and ICT-FaceKit)
 mean and what they can see.
@@ -94,20 +99,16 @@ from scipy.spatial import cKDTree
 from ..fba.face import FaceModel
 from ..fba.featurepoints import FeaturePointSet, normalise_id, point_order
 from ..fba.requirements import FAPU_POINTS, PART_POINTS, required_points
-from . import frontview, midline
+from . import frontview, headframe, midline
+from .headframe import FIT_LIMIT, SYMMETRY_LIMIT, FaceNotFoundError
 from .alignment import REQUIRED_POINTS
-from .parts import is_eyeball, mesh_components
+from .parts import is_eyeball
 from .registration import register_surface
-from .surface import (boundary_loops, closest_points, feature_warp, onto_same_sheet, vertex_normals)
+from .surface import closest_points, feature_warp, onto_same_sheet
 
 __all__ = ["FaceNotFoundError", "FoundPoints", "find_feature_points", "PART_OF",
            "CRISP_POINTS", "TEMPLATE_ES_MM", "FIT_LIMIT",
            "SYMMETRY_LIMIT"]
-
-
-class FaceNotFoundError(ValueError):
-    """The mesh is too unlike a face to find feature points on it; the message says what
-    was missing (a head-like shape, bilateral symmetry, mouth or eye openings/creases)."""
 
 
 #: The points the geometry defines crisply, which :func:`_refine` (and
@@ -121,25 +122,6 @@ CRISP_POINTS = ("2.1", "2.2", "2.3", "2.4", "2.5", "3.1", "3.2", "3.3", "3.4", "
 #: The template's eye separation in millimetres (the reference head's ES0): what
 #: ``FoundPoints.scale`` takes the target's to be.
 TEMPLATE_ES_MM = 64.0
-
-#: How far (trimmed mean distance, both ways, in eye separations) the rigidly fitted
-#: template may lie from the target's skin and the target still be a head.  Heads of other
-#: proportions fit to 0.05-0.11 (ICT-FaceKit identities, full and decimated, 0.08-0.11;
-#: reference-head variants 0.05-0.10); a sphere, box or blob to 0.13-0.15 and a plane
-#: to 0.39.  Only shapes far from any head are refused here (the nose and symmetry tests
-#: do the finer work): too low refuses a head with shoulders or hair, too high lets a
-#: plane through to the other tests, which then name a less telling reason.
-FIT_LIMIT = 0.2
-#: How far (median, eye separations) the front of the skin mirrored in the fitted mid plane
-#: may lie from the skin's surface: heads 0.002-0.015 (a decimated ICT head 0.015), random
-#: blobs up to 0.035.  Too low refuses a slightly asymmetric scan; too high lets a lopsided
-#: blob through to the nose test.
-SYMMETRY_LIMIT = 0.025
-#: How far (eye separations) the nose must stand out in front of the cheeks (the most
-#: forward point near the mid plane between the eyes and the mouth, against the most
-#: forward half an eye separation to either side): heads 0.23-0.72 (the flat-nosed
-#: reference variant nose=0.8 0.23), spheres, boxes, blobs 0.12 at most.
-NOSE_LIMIT = 0.18
 
 #: Points the template carries that belong to parts, and which part.
 PART_OF = {"3.5": "eye", "3.6": "eye", "9.8": "teeth", "9.9": "teeth", "9.10": "teeth",
@@ -465,275 +447,6 @@ def _shift_to_convention(Vt: np.ndarray, T: np.ndarray, pos: dict, tie: dict,
         pos[k], tie[k] = p, skin_ids[v]
 
 
-# -- pieces --------------------------------------------------------------------------------
-@dataclass
-class _Pieces:
-    V: np.ndarray            # all world vertices stacked
-    T: np.ndarray            # all triangles (stacked indices)
-    mesh_of: np.ndarray      # per stacked vertex: index into names
-    local: np.ndarray        # per stacked vertex: index in its mesh
-    comp: np.ndarray         # per stacked vertex: global component id
-    names: list
-    skin: int                # component id of the skin
-
-
-def _pieces(face: FaceModel) -> _Pieces:
-    verts, tris, mesh_of, local, comp, names, first, ncomp = [], [], [], [], [], [], 0, 0
-    for n, m in face.meshes.items():
-        if not len(m.vertices) or not len(m.triangles):
-            continue
-        v = face.world_vertices(n)
-        lab = mesh_components(m.triangles, len(v))
-        verts.append(v)
-        tris.append(np.asarray(m.triangles, dtype=np.int64) + first)
-        mesh_of.append(np.full(len(v), len(names)))
-        local.append(np.arange(len(v)))
-        comp.append(lab + ncomp)
-        names.append(n)
-        first += len(v)
-        ncomp += int(lab.max()) + 1
-    if not verts:
-        raise FaceNotFoundError("the face has no mesh with triangles: nothing to find "
-                                "feature points on")
-    V, T = np.vstack(verts), np.vstack(tris)
-    comp = np.concatenate(comp)
-    # the skin: the component with the largest area (the head is the biggest piece; by
-    # triangle count a decimated skin can lose to a finely meshed mouth interior)
-    area = 0.5 * np.linalg.norm(np.cross(V[T[:, 1]] - V[T[:, 0]], V[T[:, 2]] - V[T[:, 0]]), axis=1)
-    skin = int(np.argmax(np.bincount(comp[T[:, 0]], weights=area, minlength=ncomp)))
-    return _Pieces(V, T, np.concatenate(mesh_of), np.concatenate(local), comp, names, skin)
-
-
-# -- the head frame --------------------------------------------------------------------------
-def _similarity(P: np.ndarray, Q: np.ndarray) -> tuple:
-    """(s, R, t) minimising |s R P + t - Q|^2 (Umeyama)."""
-    mp, mq = P.mean(0), Q.mean(0)
-    A, B = P - mp, Q - mq
-    U, S, Wt = np.linalg.svd(B.T @ A)
-    D = np.eye(3)
-    D[2, 2] = np.sign(np.linalg.det(U @ Wt)) or 1.0
-    R = U @ D @ Wt
-    s = float((S * np.diag(D)).sum() / max((A * A).sum(), 1e-300))
-    return s, R, mq - s * R @ mp
-
-
-def _axis_rotations() -> list:
-    """The 24 rotations taking an axis-aligned (up, forward) of the model to the template's
-    (+y, +z): rows (left, up, forward) in model coordinates."""
-    axes = np.vstack([np.eye(3), -np.eye(3)])
-    out = []
-    for up in axes:
-        for fwd in axes:
-            if abs(up @ fwd) > 0.5:
-                continue
-            out.append(np.array([np.cross(up, fwd), up, fwd]))
-    return out
-
-
-def _icp(tpl: np.ndarray, tpl_tree: cKDTree, tgt: np.ndarray, tgt_tree: cKDTree,
-         s: float, R: np.ndarray, t: np.ndarray, iterations: int, keep: float = 0.8) -> tuple:
-    """Trimmed two-way similarity ICP of the target's sample ``tgt`` (model coordinates)
-    onto the template's ``tpl`` (template frame): (s, R, t, score), the map q = s R p + t,
-    score the mean of the kept distances (template units)."""
-    score = np.inf
-    for _ in range(iterations):
-        q = s * tgt @ R.T + t
-        d1, i1 = tpl_tree.query(q)
-        back = (tpl - t) @ R / s
-        d2, i2 = tgt_tree.query(back)
-        d2 = d2 * s
-        k1 = d1 <= np.quantile(d1, keep)
-        k2 = d2 <= np.quantile(d2, keep)
-        score = 0.5 * (d1[k1].mean() + d2[k2].mean())
-        P = np.vstack([tgt[k1], tgt[i2[k2]]])
-        Q = np.vstack([tpl[i1[k1]], tpl[k2]])
-        s, R, t = _similarity(P, Q)
-    return s, R, t, float(score)
-
-
-def _head_frame(skin_v: np.ndarray, tpl: _Template, ST: Optional[np.ndarray] = None) -> tuple:
-    """(s, R, t, score) of the best similarity from the target's skin (model coordinates)
-    to the template frame, over the 24 axis-aligned starts."""
-    rng = np.random.default_rng(1)
-    b_all = cKDTree(skin_v)
-    sample = skin_v[rng.choice(len(skin_v), min(len(skin_v), 1500), replace=False)]
-    A = tpl.V[tpl.sample]
-    a_tree = cKDTree(A)
-    b_tree = cKDTree(sample)
-    c = sample.mean(0)
-    radius = np.sqrt(((sample - c) ** 2).sum(1).mean())
-    t_radius = np.sqrt(((A - A.mean(0)) ** 2).sum(1).mean())
-    s0 = t_radius / max(radius, 1e-300)
-    # the 24 starts are ranked on half of each sample (from a wrong start every point
-    # lies far from the other surface, where nearest-neighbour queries are slowest); the
-    # three best are then run on the whole samples.  A fifth was enough on 100 ICT heads
-    # in random frames, but not on some coarse skins of fresh draws (seeds 2043, 2046:
-    # the right start 4th to 7th behind upside-down and backward ones, the head then
-    # refused or read upside down); on half it came first or second on each, for 0.1 s
-    A5, S5 = A[::2], sample[::2]
-    a5_tree, s5_tree = cKDTree(A5), cKDTree(S5)
-    starts = []
-    for R0 in _axis_rotations():
-        t0 = A.mean(0) - s0 * R0 @ c
-        starts.append((_icp(A5, a5_tree, S5, s5_tree, s0, R0, t0, 6)[3], R0, t0))
-    starts.sort(key=lambda r: r[0])
-    trials = sorted((_icp(A, a_tree, sample, b_tree, s0, R0, t0, 6) for _, R0, t0 in starts[:3]),
-                    key=lambda r: r[3])
-    best = [_icp(A, a_tree, sample, b_tree, *r[:3], 20) for r in trials]
-    s, R, t, score = min(best, key=lambda r: r[3])
-    # a head tilted off the axes (up to 20 degrees and a little more) can hold ICP in a
-    # local minimum: restart from the best turned by 15 degrees about each axis
-    for axis in np.eye(3):
-        for sign in (-1, 1):
-            turn = _turn(axis, sign * np.radians(15))
-            c_t = tpl.V[tpl.sample].mean(0)
-            R1 = turn @ R
-            t1 = c_t + turn @ (t - c_t)
-            best.append(_icp(A, a_tree, sample, b_tree, s, R1, t1, 20))
-    s, R, t, score = min(best, key=lambda r: r[3])
-    s, R, t, score = _icp(A, a_tree, sample, b_tree, s, R, t, 10, keep=0.9)
-    # then the face alone: the template's face (a subset of any head) onto the target,
-    # one way, so the skull's and neck's proportions no longer pull the features off
-    F = tpl.V[tpl.face]
-    nose_tpl = tpl.profile.get("9.3", tpl.points["9.3"])
-    for rounds in range(2):
-        for _ in range(15):
-            back = (F - t) @ R / s
-            d, i = b_all.query(back)
-            k = d <= np.quantile(d, 0.9)
-            s, R, t = _similarity(skin_v[i[k]], F[k])
-        # the nose tip sets the translation (the face fit can settle a third of an eye
-        # separation up or down a long face): the first peak of the mid-plane profile
-        # below the eye line that the profile then falls from like a nose
-        # (:func:`~mpeg4fba.cloning.midline.profile_points`); without triangles, the most forward point near the
-        # mid line
-        q = s * skin_v @ R.T + t
-        tip = None
-        if ST is not None:
-            prof = midline.profile(q, ST, 0.6, -2.5)
-            tip = midline.profile_points(prof, 0.0).get("9.3")
-        if tip is None:
-            box = (np.abs(q[:, 0]) < 0.3) & (np.abs(q[:, 1] - nose_tpl[1]) < 0.8) \
-                & (q[:, 2] > nose_tpl[2] - 1.0)
-            if not box.any():
-                break
-            tip = q[box][np.argmax(q[box, 2])]
-        t = t + (nose_tpl - tip) * [0, 1, 1]
-    return s, R, t, score
-
-
-def _mid_plane(Vt: np.ndarray, T: np.ndarray, iterations: int = 6) -> tuple:
-    """(A, b): the rotation and offset that put the skin's plane of bilateral symmetry at
-    x = 0 (template frame): ``Vt @ A.T + b`` is symmetric about x = 0.
-
-    The front of the face (brows to chin, within an eye separation of the mid line;
-    1,500 vertices at most) is mirrored in the current plane, each mirrored vertex is
-    matched to the closest point of the surface, and the plane x = a + b y + c z is the
-    one whose mirror puts the mirrored vertices on their matches' tangent planes (linear
-    least squares, point to plane, the worst fifth trimmed); six rounds.  The rigid fit of the symmetric template leaves the plane
-    a few percent of an eye separation off (the rest of the head pulls it); the
-    profile's points are read on this plane."""
-    A, b = np.eye(3), np.zeros(3)
-    sel = np.flatnonzero((Vt[:, 2] > 0.5) & (Vt[:, 1] > -2.0) & (Vt[:, 1] < 0.8)
-                         & (np.abs(Vt[:, 0]) < 1.0))
-    if len(sel) < 30:
-        return A, b
-    sel = sel[::max(1, len(sel) // 1500)]
-    for _ in range(iterations):
-        W = Vt @ A.T + b
-        P = W[sel]
-        Pm = P * [-1, 1, 1]
-        tri, bary, _ = closest_points(Pm, W, T)
-        M = np.einsum("nk,nkc->nc", bary, W[T[tri]])
-        Tn = np.cross(W[T[tri, 1]] - W[T[tri, 0]], W[T[tri, 2]] - W[T[tri, 0]])
-        Tn /= np.maximum(np.linalg.norm(Tn, axis=1), 1e-300)[:, None]
-        # point to plane: the mirror of p in x = a + b y + c z (small b, c) is, to first
-        # order, its mirror in x = 0 moved by 2 (a + b y + c z) along x and 2 x (0, b, c);
-        # that move should cancel its distance to the match's tangent plane
-        X = 2 * np.c_[Tn[:, 0], Tn[:, 0] * P[:, 1] + P[:, 0] * Tn[:, 1],
-                      Tn[:, 0] * P[:, 2] + P[:, 0] * Tn[:, 2]]
-        rhs = -np.einsum("nc,nc->n", Tn, Pm - M)
-        keep = np.ones(len(P), dtype=bool)
-        for _ in range(2):
-            coef = np.linalg.lstsq(X[keep], rhs[keep], rcond=None)[0]
-            r = np.abs(X @ coef - rhs)
-            keep = r <= np.quantile(r, 0.8)
-        n = np.array([1.0, -coef[1], -coef[2]])
-        n /= np.linalg.norm(n)
-        v = np.cross(n, [1.0, 0.0, 0.0])
-        sn = np.linalg.norm(v)
-        Rn = _turn(v / sn, np.arctan2(sn, n[0])) if sn > 1e-12 else np.eye(3)
-        o = np.array([coef[0], 0.0, 0.0])            # on the plane
-        if np.arctan2(sn, n[0]) > np.radians(10) or abs(coef[0]) > 0.25:
-            break     # no plane near this one fits (a front too flat across to tell)
-        A, b = Rn @ A, Rn @ b - Rn @ o
-    return A, b
-
-
-def _turn(axis: np.ndarray, angle: float) -> np.ndarray:
-    """Rotation by ``angle`` about the unit ``axis`` (Rodrigues)."""
-    K = np.array([[0, -axis[2], axis[1]], [axis[2], 0, -axis[0]], [-axis[1], axis[0], 0]])
-    return np.eye(3) + np.sin(angle) * K + (1 - np.cos(angle)) * K @ K
-
-
-# -- is it a face ------------------------------------------------------------------------------
-def _face_checks(Vt: np.ndarray, T: np.ndarray, score: float) -> None:
-    """Raise FaceNotFoundError when the skin ``Vt`` (template frame) is no face: too far
-    from a head's shape, not symmetric, or without a nose."""
-    if score > FIT_LIMIT:
-        raise FaceNotFoundError(
-            f"no face found: the mesh's largest piece is not head-shaped (the reference head "
-            f"fits it no closer than {score:.3f} eye separations on average, more than "
-            f"{FIT_LIMIT}); no bilateral symmetry, nose, mouth or eyes were found")
-    fm = (Vt[:, 2] > 0.2) & (Vt[:, 1] > -2.2) & (Vt[:, 1] < 1.2)
-    if fm.sum() < 20:
-        raise FaceNotFoundError("no face found: the mesh has no front where a face would be")
-    _, _, d = closest_points(Vt[fm] * [-1, 1, 1], Vt, T)
-    asym = float(np.median(d))
-    if asym > SYMMETRY_LIMIT:
-        raise FaceNotFoundError(
-            f"no face found: no bilateral symmetry (the front mirrored in the best mid plane "
-            f"lies {asym:.3f} eye separations from the surface in the median, more than "
-            f"{SYMMETRY_LIMIT})")
-    band = (Vt[:, 1] > -1.0) & (Vt[:, 1] < 0.0)
-    mid = band & (np.abs(Vt[:, 0]) < 0.15)
-    side = band & (np.abs(Vt[:, 0]) > 0.45) & (np.abs(Vt[:, 0]) < 0.65)
-    nose = (Vt[mid, 2].max() if mid.any() else -np.inf) - (Vt[side, 2].max() if side.any() else 0.0)
-    if not nose >= NOSE_LIMIT:
-        raise FaceNotFoundError(
-            f"no face found: symmetric, but no nose stands out on the mid line (it stands "
-            f"{max(nose, -9.99):.2f} eye separations in front of the cheeks, less than "
-            f"{NOSE_LIMIT}); no mouth or eye openings or creases can be placed")
-
-
-def _feature_evidence(Vt: np.ndarray, T: np.ndarray, where: np.ndarray, radius: float) -> float:
-    """How much a concave crease or an opening there is within ``radius`` of ``where``
-    (template frame): the largest of (boundary edges nearby) and the concavity (the mean
-    curvature sign of the umbrella Laplacian against the normal, in eye separations)."""
-    near = np.flatnonzero(np.linalg.norm(Vt - where, axis=1) < radius)
-    if not len(near):
-        return 0.0
-    loops = boundary_loops(T)
-    on_loop = np.zeros(len(Vt), dtype=bool)
-    for l in loops:
-        on_loop[l] = True
-    if on_loop[near].sum() >= 3:
-        return 1.0
-    N = vertex_normals(Vt, T)
-    # umbrella Laplacian: mean of the neighbours minus the vertex; along the normal it is
-    # positive in a concave crease
-    e = np.concatenate([T[:, [0, 1]], T[:, [1, 2]], T[:, [2, 0]]])
-    e = np.vstack([e, e[:, ::-1]])
-    acc = np.zeros_like(Vt)
-    cnt = np.zeros(len(Vt))
-    np.add.at(acc, e[:, 0], Vt[e[:, 1]])
-    np.add.at(cnt, e[:, 0], 1)
-    lap = acc / np.maximum(cnt, 1)[:, None] - Vt
-    edge = np.sqrt(np.mean(((Vt[e[:, 0]] - Vt[e[:, 1]]) ** 2).sum(1)))
-    concave = (lap[near] * N[near]).sum(1) / max(edge, 1e-12)
-    return float(np.clip(np.quantile(concave, 0.98) / 0.3, 0.0, 1.0))
-
-
 # -- the whole step --------------------------------------------------------------------------
 def find_feature_points(face: FaceModel, *, ids: Optional[Iterable[str]] = None) -> FoundPoints:
     """The feature points of ``face`` (which needs none), found from its geometry.
@@ -748,7 +461,7 @@ def find_feature_points(face: FaceModel, *, ids: Optional[Iterable[str]] = None)
     """
     want = None if ids is None else {normalise_id(k) for k in ids}
     tpl = _template()
-    pieces = _pieces(face)
+    pieces = headframe.pieces(face)
     skin_mask = pieces.comp == pieces.skin
     skin_ids = np.flatnonzero(skin_mask)
     # skin triangles, renumbered
@@ -760,14 +473,14 @@ def find_feature_points(face: FaceModel, *, ids: Optional[Iterable[str]] = None)
     if len(ST) < 50:
         raise FaceNotFoundError(f"no face found: the largest piece of the mesh has only "
                                 f"{len(ST)} triangles")
-    s, R, t, score = _head_frame(SV, tpl, ST)
+    s, R, t, score = headframe.head_frame(SV, tpl, ST)
     Vt = s * SV @ R.T + t                      # target skin in the template frame
     # the mid plane at x = 0 (before the symmetry check: the rigid fit alone can leave a
     # straight face a few degrees turned, and its mirror then misses it)
-    A, b = _mid_plane(Vt, ST)
+    A, b = headframe.mid_plane(Vt, ST)
     R, t = A @ R, A @ t + b
     Vt = s * SV @ R.T + t
-    _face_checks(Vt, ST, score)
+    headframe.face_checks(Vt, ST, score)
     # the mid-line profile's points (nose, lips), then the template's skin bent onto the
     # target's, held at them
     prof_pts = midline.profile_points(midline.profile(Vt, ST, 0.6, -2.5), 0.0,
@@ -920,7 +633,7 @@ def _refine(Vt, ST, pos, tie, skin_ids, reasons, prof_has_tip: bool = False,
     return done
 
 
-def _parts(pieces: _Pieces, s, R, t, X, tpl: _Template, pos, tie, reasons) -> set:
+def _parts(pieces: headframe.Pieces, s, R, t, X, tpl: _Template, pos, tie, reasons) -> set:
     """Eyeball, teeth and tongue points from the components where the template has those
     parts (template frame); the kinds found."""
     found = set()

@@ -87,7 +87,10 @@ def test_input_faces_are_not_modified(source, target, cloned):
 def test_cloning_a_face_onto_itself_reproduces_its_motion(source):
     same = reference_head(resolution=0.6)
     same.fat = FAT()
-    out = FacialMotionCloner(source, same, support=0.0, overlap="nearest").clone()
+    # side_blend=0: a vertex where the lips meet takes its own side's motion alone (the
+    # default blends in the other side's, which onto itself is off by a little)
+    out = FacialMotionCloner(source, same, support=0.0, overlap="nearest",
+                             side_blend=0).clone()
     for key in [(3, 0), (6, 0), (19, 0), (31, 0), (53, 0), (1, 4), (2, 6)]:
         value = 512 if key[0] > 2 else 63
         a = _world_motion(source, key, value)
@@ -109,7 +112,9 @@ def test_scaled_target_gets_scaled_motion(source):
         t.center = tuple(np.asarray(t.center) * s)
     big.points = FeaturePointSet({k: big.points[k] * s for k in big.points}, big.points.vertices)
     big.fapu = None
-    out = FacialMotionCloner(source, big, support=0.0, overlap="nearest").clone()
+    # (side_blend=0: onto the same face, scaled, each vertex's own side is exact)
+    out = FacialMotionCloner(source, big, support=0.0, overlap="nearest",
+                             side_blend=0).clone()
     for key, value in [((4, 0), 400), ((33, 0), 600), ((2, 1), 63)]:
         a = _world_motion(source, key, value)["Skin"]
         b = _world_motion(out, key, value)["Skin"]
@@ -255,6 +260,49 @@ def test_the_rims_field_is_held_at_0_at_the_holes_corners_only():
     assert (lip_regions(uv, pts)[lower] != LOWER).sum() > 10     # the polygons alone
     got = lip_regions(uv, pts, triangles=tris, vertices=xyz)
     assert (got[lower] == LOWER).all()
+
+
+def test_slit_sides_say_how_clearly_the_mesh_settled_each_vertex():
+    """The field that settled a vertex: 1 / -1 on the hole's rims, its sign the side,
+    NaN where the polygons alone said the side."""
+    from mpeg4fba.cloning.lips import LIPS, slit_sides
+    xyz, tris, pts = _mouth_with_a_hole()
+    uv = xyz[:, :2]
+    labels, side = slit_sides(uv, pts, slits=(LIPS,), triangles=tris, vertices=xyz)
+    assert (labels == lip_regions(uv, pts, triangles=tris, vertices=xyz)).all()
+    settled = np.isfinite(side)
+    assert ((labels[settled] == UPPER) == (side[settled] > 0)).all()
+    rim = (np.abs(xyz[:, 0]) < 0.2) & (np.abs(np.abs(xyz[:, 1]) - 0.0125) < 1e-9)
+    assert np.allclose(np.abs(side[rim]), 1.0)
+    # beyond the corners and far from the slit, the polygons alone
+    assert np.isnan(side[(np.abs(xyz[:, 1]) > 0.2) | (np.abs(xyz[:, 0]) > 0.31)]).all()
+
+
+def test_where_the_lips_meet_a_vertex_takes_both_sides_motion(source):
+    """A target vertex whose side the mesh says weakly (round a mouth corner) takes both
+    lips' weights, the upper's by (1 + side / SIDE_BLEND) / 2: a corner point found a
+    little off no longer gives it all of the wrong lip's motion."""
+    from mpeg4fba.cloning.lips import SIDE_BLEND
+    same = reference_head(resolution=0.6)
+    blended = FacialMotionCloner(source, same, support=0.0)
+    plain = FacialMotionCloner(source, same, support=0.0, side_blend=0)
+    side = blended.target_sides
+    weak = np.flatnonzero(np.abs(np.nan_to_num(side, nan=1.0)) < SIDE_BLEND)
+    assert len(weak) >= 2
+    W, P = blended.weights, plain.weights
+    assert np.allclose(np.asarray(W.sum(axis=1)).ravel(), 1.0)
+    other = np.setdiff1d(np.arange(W.shape[0]), weak)
+    assert abs(W[other] - P[other]).max() < 1e-12            # the rest as before
+    # some weak rows now reach source vertices of both lips (others sit where both
+    # sides' weights are the same)
+    sreg = blended.source_regions
+    on_up = np.asarray(W[weak][:, sreg == UPPER].sum(axis=1)).ravel()
+    on_low = np.asarray(W[weak][:, sreg == LOWER].sum(axis=1)).ravel()
+    both = (on_up > 0.05) & (on_low > 0.05)
+    assert both.sum() >= 2
+    assert (np.asarray(abs(W[weak] - P[weak]).sum(axis=1)).ravel()[both] > 0.1).all()
+    with pytest.raises(ValueError, match="side_blend"):
+        FacialMotionCloner(source, same, side_blend=-1)
 
 
 def _strip(profile, xs=(0.0, 0.05, 0.1, 0.15)) -> tuple:

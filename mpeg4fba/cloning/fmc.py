@@ -75,7 +75,7 @@ from .detect import FaceNotFoundError, find_feature_points
 from .correspondence import (ALIGNMENTS, DERIVE_DISTANCE, NECK_RATIO,
                              AlignOptions, Correspondence, correspond, derive_points)
 from .errors import CloneWarning, check_choice
-from .lips import LIPS, SLITS
+from .lips import LIPS, SIDE_BLEND, SLITS
 from .local_frames import LocalFrameCloner
 from .part_motion import PartMapping
 from .parts import PART_SPECS, find_parts, match_parts, separate_parts, source_transform
@@ -234,6 +234,10 @@ class FacialMotionCloner:
     facing : float
         With the surface interpolation, how much a source sheet facing against the target
         vertex counts against it (:data:`FACING`), 0 to turn it off.
+    side_blend : float
+        Target vertices whose side of a lip or eyelid slit the mesh says more weakly than
+        this take both sides' motion (:data:`~mpeg4fba.cloning.lips.SIDE_BLEND`); 0: all
+        of one side's, the paper's rule.
     refine : bool
         Go on to :data:`~mpeg4fba.cloning.registration.REGISTRATION_FINE_SCALES` for the
         surface points, the regions staying with the stiffer fit.
@@ -253,6 +257,10 @@ class FacialMotionCloner:
         ``surface_points``, ``neck_pinned``... read through from it.
     source_regions, target_regions : array or None
         Each skin vertex's side of the lips and eyelids.
+    target_sides : array or None
+        The field that settled a target vertex's side by its mesh, NaN where the
+        polygons alone did (:func:`~mpeg4fba.cloning.lips.slit_sides`); where it is weak
+        the vertex takes both sides' motion (:data:`~mpeg4fba.cloning.lips.SIDE_BLEND`).
     weights : scipy.sparse.csr_matrix
         (Nt, Ns) the mapping.
     """
@@ -267,7 +275,7 @@ class FacialMotionCloner:
                  by_mesh: bool = True, alignment: str = "surface", neck: bool = True,
                  register: bool = True, interpolation: Optional[str] = None,
                  membrane: float = REGISTRATION_MEMBRANE, facing: float = FACING,
-                 refine: bool = True,
+                 refine: bool = True, side_blend: float = SIDE_BLEND,
                  correspondence: Union[Correspondence, Callable[..., Correspondence],
                                        None] = None):
         # 0. the points, the options of the 2D interpolation, the placement
@@ -344,8 +352,12 @@ class FacialMotionCloner:
         self.align_options = AlignOptions(triangulation, alignment, self.neck, self.register,
                                           self.refine, self.membrane, self.by_mesh)
         self.slits = (LIPS,) * bool(lips) + SLITS[1:] * bool(eyelids)
+        self.side_blend = float(side_blend)
+        if not np.isfinite(self.side_blend) or self.side_blend < 0:
+            raise ValueError(f"side_blend must be a finite number >= 0, not {side_blend!r}")
         self.weight_options = WeightOptions(support, samples, interpolation, overlap, outside,
-                                            self.facing, self.slits, self.by_mesh)
+                                            self.facing, self.slits, self.by_mesh,
+                                            self.side_blend)
         # 2. the correspondence
         if correspondence is None:
             correspondence = correspond(self.src, self.tgt, self.align_options)
@@ -353,11 +365,11 @@ class FacialMotionCloner:
             correspondence = correspondence(self.src, self.tgt, self.align_options)
         self.correspondence: Correspondence = self._checked(correspondence)
         # 3. the regions, 4. the mapping
-        self.source_regions, self.target_regions = slit_labels(
+        self.source_regions, self.target_regions, self.target_sides = slit_labels(
             self.src, self.tgt, self.correspondence.aligned, self.slits)
         self.weights = mapping_weights(self.src, self.tgt, self.correspondence,
                                        self.source_regions, self.target_regions,
-                                       self.weight_options)
+                                       self.weight_options, self.target_sides)
         # 6. (in clone) the parts' motion
         self.part_mapping = PartMapping(self.src, self.tgt, self.source_parts,
                                         self.target_parts, self.source_transforms,

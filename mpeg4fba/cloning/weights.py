@@ -24,6 +24,9 @@ Where we depart from it (each an option, the paper's rule one argument away):
   triangle with one corner on the other side stays visible (:func:`visible_triangles`),
   and the filter shrinks to nothing at the corners of the mouth and eyes
   (:func:`support_radius`);
+* a target vertex whose side of a slit its mesh says only weakly (round a mouth or eye
+  corner) takes both sides' motion, weighted by how clearly it was said
+  (:data:`~mpeg4fba.cloning.lips.SIDE_BLEND`, ``side_blend=0`` for the paper's rule);
 * the target's feature point vertices take the unfiltered interpolation, so each FAP
   moves a feature point by exactly what it moves the source's;
 * each target mesh maps from its counterpart (:func:`~mpeg4fba.cloning.skin.mesh_groups`).
@@ -44,7 +47,7 @@ import scipy.sparse as sp
 
 from .correspondence import Correspondence
 from .interp2d import antialiased_weights
-from .lips import OUTSIDE, opposite, slit_regions
+from .lips import OUTSIDE, SIDE_BLEND, opposite, slit_regions, slit_sides
 from .skin import Skin, coarseness, mean_edge, mesh_groups
 from .surface import surface_weights, triangle_normals, vertex_normals
 
@@ -150,6 +153,9 @@ class WeightOptions:
         The :class:`~mpeg4fba.cloning.lips.Slit` s treated (lips, eyelids).
     by_mesh : bool
         Each target mesh from its counterpart (:func:`~mpeg4fba.cloning.skin.mesh_groups`).
+    blend : float
+        :data:`~mpeg4fba.cloning.lips.SIDE_BLEND`: target vertices whose side of a slit the
+        mesh says more weakly than this take both sides' motion; 0: each takes its side's.
     """
 
     support: float = 0.02
@@ -160,6 +166,7 @@ class WeightOptions:
     facing: float = FACING
     slits: tuple = ()
     by_mesh: bool = True
+    blend: float = SIDE_BLEND
 
 
 def visible_triangles(corner_regions: np.ndarray, hide: int) -> np.ndarray:
@@ -178,17 +185,19 @@ def visible_triangles(corner_regions: np.ndarray, hide: int) -> np.ndarray:
 
 
 def slit_labels(source: Skin, target: Skin, aligned: np.ndarray, slits: tuple) -> tuple:
-    """(source regions, target regions): each skin vertex's side of the lips and eyelids
-    (:func:`~mpeg4fba.cloning.lips.slit_regions`, by the source's feature points; the
-    target at its ``aligned`` positions); (None, None) without ``slits``."""
+    """(source regions, target regions, target sides): each skin vertex's side of the lips
+    and eyelids (:func:`~mpeg4fba.cloning.lips.slit_regions`, by the source's feature
+    points; the target at its ``aligned`` positions), and the field that settled the
+    target's by its mesh (:func:`~mpeg4fba.cloning.lips.slit_sides`); (None, None, None)
+    without ``slits``."""
     if not slits:
-        return None, None
+        return None, None, None
     uv = source.space.uv
     pts = {k: source.space.point_uv(k) for k in source.space.ids}
     return (slit_regions(uv, pts, slits=slits, triangles=source.triangles,
                          vertices=source.vertices),
-            slit_regions(aligned, pts, slits=slits, triangles=target.triangles,
-                         vertices=target.vertices))
+            *slit_sides(aligned, pts, slits=slits, triangles=target.triangles,
+                        vertices=target.vertices))
 
 
 def facing_normals(source: Skin, target: Skin, surface_points: np.ndarray, facing: float,
@@ -242,9 +251,12 @@ def support_radius(source: Skin, aligned: np.ndarray, support: float,
 
 def mapping_weights(source: Skin, target: Skin, correspondence: Correspondence,
                     source_regions: Optional[np.ndarray], target_regions: Optional[np.ndarray],
-                    options: WeightOptions = WeightOptions()) -> sp.csr_matrix:
+                    options: WeightOptions = WeightOptions(),
+                    target_sides: Optional[np.ndarray] = None) -> sp.csr_matrix:
     """The weights step: sparse (Nt, Ns) ``W``, rows the target's skin vertices, columns
-    the source's, each row summing to 1; regions from :func:`slit_labels`."""
+    the source's, each row summing to 1; regions and sides from :func:`slit_labels`.  A
+    target vertex whose side the mesh says weakly (``|side| < options.blend``) takes
+    both sides' weights, the upper side's by ``(1 + side / blend) / 2``."""
     src_uv, depth = source.space.uv, source.space.depth
     aligned = correspondence.aligned
     nt = len(aligned)
@@ -296,16 +308,37 @@ def mapping_weights(source: Skin, target: Skin, correspondence: Correspondence,
         treg = np.full(nt, OUTSIDE, dtype=np.int8)
     sreg = source_regions
     tri_mesh = source.mesh_index[tris[:, 0]]
+    def sided(rows: np.ndarray, in_group: np.ndarray, label: int) -> sp.csr_matrix:
+        # the weights of ``rows`` taken as on the side ``label``
+        hide = opposite(int(label))
+        keep = in_group if hide == OUTSIDE else in_group & visible_triangles(sreg[tris], hide)
+        return weights(rows, tris[keep])
+
+    blend = float(options.blend)
+    mixed = np.zeros(nt, dtype=bool)
+    if target_sides is not None and blend > 0:
+        with np.errstate(invalid="ignore"):
+            mixed = (treg != OUTSIDE) & (np.abs(target_sides) < blend)
     blocks, order = [], []
     for group_rows, source_meshes in mesh_groups(source, target, options.by_mesh):
         in_group = np.isin(tri_mesh, source_meshes)
         for which in np.unique(treg[group_rows]):
             rows = group_rows[treg[group_rows] == which]
-            hide = opposite(int(which))
-            keep = in_group if hide == OUTSIDE else in_group & visible_triangles(sreg[tris], hide)
-            blocks.append(weights(rows, tris[keep]))
+            blocks.append(sided(rows, in_group, which))
             order.append(rows)
+        rows = group_rows[mixed[group_rows]]
+        # where a slit's sides meet: both sides' weights, by how clearly the mesh said it
+        for up in np.unique(treg[rows] - 1 + treg[rows] % 2):
+            r = rows[(treg[rows] == up) | (treg[rows] == up + 1)]
+            a = np.clip(0.5 + 0.5 * target_sides[r] / blend, 0.0, 1.0)
+            blocks.append(sp.diags(a) @ sided(r, in_group, up)
+                          + sp.diags(1 - a) @ sided(r, in_group, up + 1))
+            order.append(r + nt)
     w = sp.vstack(blocks).tocsr()
+    at = np.concatenate(order)
+    one = at < nt
     perm = np.empty(nt, dtype=np.int64)
-    perm[np.concatenate(order)] = np.arange(nt)
+    perm[at[one]] = np.flatnonzero(one)
+    # a blended row stands in for the same row taken on one side
+    perm[at[~one] - nt] = np.flatnonzero(~one)
     return w[perm]

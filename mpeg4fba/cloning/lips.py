@@ -327,16 +327,19 @@ RIM_CONFIDENCE = 0.5
 #: ``(1 + field / SIDE_BLEND) / 2`` (:func:`~mpeg4fba.cloning.weights.mapping_weights`),
 #: rather than all of one side's.  Round a mouth corner the field is weak (0.01-0.13 at
 #: the lower-lip vertices a corner point found 0.9 % of the eye distance off gave the
-#: upper lip's motion, 11.8 % off under jawOpen; 6.6 blended), and there both lips'
-#: motions meet anyway.  ICT heads (the first 3 people of a fresh draw, seed 6161, and
-#: of the regression draw, full and decimated, each cloned with landmark points, found
-#: points and landmark points plus 1 mm of noise: 36 clones), largest error in % of
-#: the eye distance: 5 better (17.3 -> 9.1, 9.4 -> 7.2, 9.1 -> 6.7, 4.2 -> 3.6, 8.8 ->
-#: 8.7), one worse (a clean decimated clone, 3.5 -> 4.8), means within 1 %.  With the
-#: lips alone blended (6 people of each draw, 72 clones) 5 better, none worse; 0.25
-#: blended fewer (3 of those 5), 1.0 4.7 times as many vertices on one head, where the
-#: largest error came out higher (7.2 against 6.6).
-SIDE_BLEND = 0.5
+#: upper lip's motion, 11.8 % off under jawOpen; 6.6 blended at 0.5), and there both
+#: lips' motions meet anyway.  But a vertex whose side was right loses by the blend, so
+#: the width is a trade, measured (largest error, % of the eye distance) on ICT heads
+#: cloned with landmark, found and 1 mm noisy points (the first 3 people of a fresh draw,
+#: seed 6161, and of the regression draw, full and decimated: 36 clones) and on the real
+#: decimator's pairs with exact points (``benchmarks/bench_clone_pairs.py``, seeds 1919,
+#: 2032, 2033: 120 clones).  0.5: 5 better and 1 worse of the 36 (17.3 -> 9.1, 9.4 ->
+#: 7.2, 9.1 -> 6.7; 3.5 -> 4.8), but 7 better and 12 worse of the pairs on 1919 and 2032
+#: alone (decimated 2032's median 5.71 -> 6.21).  0.1 and 0.25: 3 better, none worse of
+#: the 36 (17.3 -> 9.1, 9.4 -> 7.2, 4.2 -> 3.6); of the pairs 0.1 7 better and 4 worse
+#: (7.87 -> 5.51, 5.18 -> 4.62; 2.60 -> 5.05, the others by 0.1 or less; decimated 2032's
+#: median 5.71 -> 5.37), 0.25 8 better and 4 worse on 1919 and 2032.
+SIDE_BLEND = 0.1
 #: How far short of its ends (in bands) a rim stops: where the loop turns at a corner,
 #: which lip a vertex is on is the band's to say.
 RIM_GUARD = 2.0

@@ -1,5 +1,6 @@
 #!/usr/bin/env python
-"""Learn :data:`mpeg4fba.cloning.detect.CONVENTION_SHIFT` and ``TEMPLATE_SHIFT`` on training identities.
+"""Learn :data:`mpeg4fba.cloning.convention.CONVENTION_SHIFT` and
+:data:`mpeg4fba.cloning.template.TEMPLATE_SHIFT` on training identities.
 
     python -m benchmarks.calibrate_points [--seeds 101-120] [--rounds 3]
 
@@ -11,7 +12,7 @@ mix of ICT's identity modes, :func:`benchmarks.ict.identity`; full mesh and a de
 copy, as in ``bench_find_points``) it finds the points, takes (landmark point - found
 point) in the detector's template frame (eye separations), pools each left/right pair
 (the right side mirrored), and prints the component-wise median per point as the table
-to paste into ``mpeg4fba/cloning/detect.py``.  ``--rounds 2`` runs the detector again
+to paste into ``mpeg4fba/cloning/convention.py`` and ``template.py``.  ``--rounds 2`` runs the detector again
 with the first round's shifts and adds the median of what is left (the drop back onto
 the skin takes part of each shift).
 
@@ -34,11 +35,11 @@ if str(ROOT) not in sys.path:
 
 from benchmarks import ict  # noqa: E402
 from benchmarks.bench_find_points import draw_identity  # noqa: E402
-from mpeg4fba.cloning import detect  # noqa: E402
+from mpeg4fba.cloning import convention, detect, template  # noqa: E402
 from mpeg4fba.fba.featurepoints import point_order  # noqa: E402
 
 #: Left (or midline) point of each landmark-defined point's pair.
-_LEFT = {b: a for a, b in detect._PAIRS}
+_LEFT = {b: a for a, b in template._PAIRS}
 
 
 def _seeds(text: str) -> list:
@@ -59,9 +60,10 @@ def residuals(data, seeds, shift: dict, template_shift: dict) -> dict:
     """{left point: [(3,) landmark - found, template frame]} over the training heads,
     the detector run with ``shift`` as its CONVENTION_SHIFT and ``template_shift`` as its
     TEMPLATE_SHIFT."""
-    old = detect.CONVENTION_SHIFT, detect.TEMPLATE_SHIFT
-    detect.CONVENTION_SHIFT, detect.TEMPLATE_SHIFT = shift, template_shift
-    detect._template.cache_clear()
+    # the tables are read where they live, by the functions that use them
+    old = convention.CONVENTION_SHIFT, template.TEMPLATE_SHIFT
+    convention.CONVENTION_SHIFT, template.TEMPLATE_SHIFT = shift, template_shift
+    template._template.cache_clear()
     out: dict = {}
     try:
         for i, seed in enumerate(seeds):
@@ -86,8 +88,8 @@ def residuals(data, seeds, shift: dict, template_shift: dict) -> dict:
                     out.setdefault(k, []).append(d)
             print(f"  identity {seed} done", flush=True)
     finally:
-        detect.CONVENTION_SHIFT, detect.TEMPLATE_SHIFT = old
-        detect._template.cache_clear()
+        convention.CONVENTION_SHIFT, template.TEMPLATE_SHIFT = old
+        template._template.cache_clear()
     return out
 
 

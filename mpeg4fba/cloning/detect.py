@@ -90,7 +90,6 @@ True
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from functools import lru_cache
 from typing import Iterable, Optional
 
 import numpy as np
@@ -100,11 +99,15 @@ from ..fba.face import FaceModel
 from ..fba.featurepoints import FeaturePointSet, normalise_id, point_order
 from ..fba.requirements import FAPU_POINTS, PART_POINTS, required_points
 from . import frontview, headframe, midline
+from .convention import (_CONVENTION_RIGHT, CONVENTION, CONVENTION_SHIFT,  # noqa: F401
+                         _convention_points, _shift_to_convention)
+from .template import (_MIRROR, _PAIRS, TEMPLATE_SHIFT, _anchors, _boundary_vertices,  # noqa: F401
+                       _opening_boxes, _opening_landmarks, _Template, _template)
 from .headframe import FIT_LIMIT, SYMMETRY_LIMIT, FaceNotFoundError
 from .alignment import REQUIRED_POINTS
 from .parts import is_eyeball
 from .registration import register_surface
-from .surface import closest_points, feature_warp, onto_same_sheet
+from .surface import closest_points, feature_warp
 
 __all__ = ["FaceNotFoundError", "FoundPoints", "find_feature_points", "PART_OF",
            "CRISP_POINTS", "TEMPLATE_ES_MM", "FIT_LIMIT",
@@ -126,15 +129,6 @@ TEMPLATE_ES_MM = 64.0
 #: Points the template carries that belong to parts, and which part.
 PART_OF = {"3.5": "eye", "3.6": "eye", "9.8": "teeth", "9.9": "teeth", "9.10": "teeth",
             "9.11": "teeth", "6.1": "tongue", "6.2": "tongue", "6.3": "tongue", "6.4": "tongue"}
-# left/right pairs (the face's left first), for the symmetry part of the confidence
-_PAIRS = (("2.4", "2.5"), ("2.6", "2.7"), ("2.8", "2.9"), ("2.11", "2.12"), ("2.13", "2.14"),
-          ("3.1", "3.2"), ("3.3", "3.4"), ("3.5", "3.6"), ("3.7", "3.12"), ("3.11", "3.8"),
-          ("3.9", "3.10"), ("3.13", "3.14"), ("4.1", "4.2"), ("4.3", "4.4"), ("4.5", "4.6"),
-          ("5.1", "5.2"), ("5.3", "5.4"), ("8.3", "8.4"), ("8.5", "8.6"), ("8.7", "8.8"),
-          ("8.10", "8.9"), ("9.1", "9.2"), ("9.5", "9.4"), ("9.7", "9.6"), ("9.13", "9.14"),
-          ("10.1", "10.2"), ("10.3", "10.4"), ("10.5", "10.6"), ("10.7", "10.8"),
-          ("10.9", "10.10"), ("11.2", "11.3"))
-_MIRROR = {a: b for a, b in _PAIRS} | {b: a for a, b in _PAIRS}
 
 
 @dataclass(frozen=True)
@@ -185,266 +179,6 @@ class FoundPoints:
             return (None, 0.0)
         k = min(self.confidence, key=lambda i: (self.confidence[i], i))
         return k, float(self.confidence[k])
-
-
-# -- the template --------------------------------------------------------------------------
-@dataclass(frozen=True)
-class _Template:
-    V: np.ndarray          # skin vertices, template frame, eye separations
-    T: np.ndarray
-    points: dict           # id -> position (template frame, ES units)
-    skin_index: dict       # id -> skin vertex for skin points
-    parts: dict            # kind -> (vertices, triangles) in the template frame
-    sample: np.ndarray     # skin vertex indices for the rigid fit
-    face: np.ndarray       # skin vertex indices of the face (brows to chin, ear to ear)
-    openings: dict         # name -> (centre, {landmark: skin vertex}) of the mouth and eyes
-    es: float              # metres
-    profile: dict          # the mid-line points of its profile (:func:`~mpeg4fba.cloning.midline.profile_points`)
-    eyes: dict             # its lid-margin points (:func:`~mpeg4fba.cloning.frontview.eye_points`)
-    anchors: dict          # id -> (triangle, barycentric) of a point TEMPLATE_SHIFT moves
-
-
-@lru_cache(maxsize=1)
-def _template() -> _Template:
-    from ..models.reference_head import reference_head
-    head = reference_head(resolution=1.0)
-    es = float(np.linalg.norm(head.points["3.5"] - head.points["3.6"]))
-    V = head.world_vertices("Skin") / es
-    T = head.meshes["Skin"].triangles
-    pts = {k: head.points[k] / es for k in head.points}
-    skin_index = {k: v for k, (m, v) in head.points.vertices.items() if m == "Skin"}
-    # the menton convention for 2.1 (module docstring), applied to the template too
-    pts["2.1"] = midline.menton(V, T, pts)
-    skin_index["2.1"] = int(np.argmin(np.linalg.norm(V - pts["2.1"], axis=1)))
-    parts = {}
-    for kind, names in (("eye", ("LeftEyeball", "RightEyeball")), ("teeth", ("UpperTeeth", "LowerTeeth")),
-                        ("tongue", ("Tongue",))):
-        for n in names:
-            parts[n] = (head.world_vertices(n) / es, head.meshes[n].triangles)
-    # an even sample of the skin for the rigid fit (the face counts double: it matters)
-    rng = np.random.default_rng(0)
-    face = np.flatnonzero(V[:, 2] > 0.3)
-    rest = np.flatnonzero(V[:, 2] <= 0.3)
-    sample = np.sort(np.concatenate([rng.choice(face, min(len(face), 900), replace=False),
-                                     rng.choice(rest, min(len(rest), 500), replace=False)]))
-    # the face: in front of the ears, from the brows' top to just under the chin
-    chin, brow = pts["2.1"], pts["4.3"]
-    face = np.flatnonzero((V[:, 2] > pts["3.7"][2] - 0.35) & (V[:, 1] < brow[1] + 0.35)
-                          & (V[:, 1] > chin[1] - 0.1) & (np.abs(V[:, 0]) < 1.1))
-    face = face[::max(1, len(face) // 1500)]
-    openings = {}
-    edge = _boundary_vertices(T, len(V))
-    for name, (c, half) in _opening_boxes(pts).items():
-        got = _opening_landmarks(V, edge, c, half)
-        if got is not None:
-            openings[name] = (c, {k: int(v) for k, v in got.items()})
-    anchors = _anchors(V, T, pts)
-    prof = midline.profile_points(midline.profile(V, T, 0.6, -2.5), 0.0)
-    eyes = {}
-    for name, keys in frontview.EYE_KEYS.items():
-        got = frontview.eye_opening(V, T, 0.5 * (pts[keys[0]] + pts[keys[1]]), name == "left eye")
-        eyes.update({k: got[r] for k, r in zip(keys, ("out", "in", "top", "bottom")) if r in got})
-    return _Template(V, T, pts, skin_index, parts, sample, face, openings, es, prof, eyes,
-                     anchors)
-
-
-#: Points no geometry marks, carried from the template by the registration: where on the
-#: template each lies in the landmark convention, as a move of the template's own point
-#: (template frame, eye separations; the face's left, the right mirrored).  The reference
-#: head's brows and chin corners follow its modeller's idea of them; these moves put them
-#: where annotators do.  Learned by ``python -m benchmarks.calibrate_points`` with
-#: :data:`CONVENTION_SHIFT` (its docstring says on what).  Carried by the registration
-#: they beat proportions of the crisp points found: over the training heads the spread
-#: about the median was 1.8 / 1.8 / 2.1 / 2.0 % ES (4.1 / 4.3 / 4.5 / 2.11) carried,
-#: against 2.3 / 2.8 / 4.5 / 2.5 placed in the eyes' (or chin's and mouth's) frame.
-TEMPLATE_SHIFT: dict = {
-    "2.11": (-0.0427, +0.0548, +0.1436),
-    "4.1": (-0.0343, +0.0805, +0.0159),
-    "4.3": (+0.0594, +0.0617, -0.0403),
-    "4.5": (+0.0893, -0.0113, -0.1524),
-}
-
-
-def _anchors(V: np.ndarray, T: np.ndarray, pts: dict) -> dict:
-    """{id: (triangle, barycentric)}: each :data:`TEMPLATE_SHIFT` point (and its mirror
-    partner) moved by its shift onto the template's skin."""
-    keys, moved = [], []
-    for k, d in TEMPLATE_SHIFT.items():
-        for kk, sign in ((k, 1.0), (_MIRROR.get(k), -1.0)):
-            if kk is not None and kk in pts:
-                keys.append(kk)
-                moved.append(pts[kk] + np.asarray(d, dtype=np.float64) * [sign, 1, 1])
-    if not keys:
-        return {}
-    tri, bary, _ = closest_points(np.array(moved), V, T)
-    return {k: (int(t), b) for k, t, b in zip(keys, tri, bary)}
-
-
-# the template's opening widths (eye separations): an eye's, the mouth's (by box size)
-_WIDTH = {False: 0.30, True: 0.64}
-
-
-def _opening_boxes(pts: dict) -> dict:
-    """Opening name -> (centre, half sizes) of the box searched for it, template frame."""
-    mouth = 0.5 * (pts["8.3"] + pts["8.4"])
-    out = {"mouth": (mouth, np.array([0.9, 0.4, 0.8]))}
-    for name, (a, b) in (("left eye", ("3.7", "3.11")), ("right eye", ("3.12", "3.8"))):
-        out[name] = (0.5 * (pts[a] + pts[b]), np.array([0.32, 0.22, 0.5]))
-    return out
-
-
-def _boundary_vertices(T: np.ndarray, n: int) -> np.ndarray:
-    """(n,) True at the vertices on a boundary edge (an edge of one triangle)."""
-    e = np.sort(np.concatenate([T[:, [0, 1]], T[:, [1, 2]], T[:, [2, 0]]]), axis=1)
-    key = e[:, 0] * n + e[:, 1]
-    u, cnt = np.unique(key, return_counts=True)
-    once = u[cnt == 1]
-    out = np.zeros(n, dtype=bool)
-    out[once // n] = True
-    out[once % n] = True
-    return out
-
-
-def _opening_landmarks(V: np.ndarray, edge: np.ndarray, centre: np.ndarray,
-                       half: np.ndarray) -> Optional[dict]:
-    """{"out", "in", "top", "bottom"} -> vertex of the opening (boundary vertices) in the
-    box round ``centre`` (template frame): its lateral extremes, and its top and bottom
-    near the middle; None without enough boundary there."""
-    box = np.flatnonzero(edge & np.all(np.abs(V - centre) < half, axis=1))
-    if len(box) < 6:
-        return None
-    x = V[box, 0]
-    width = float(np.ptp(x))
-    if width < 0.5 * half[0]:
-        return None
-    mid = box[np.abs(x - 0.5 * (x.max() + x.min())) < 0.15 * width]
-    if not len(mid):
-        return None
-    out = {"left": box[np.argmax(x)], "right": box[np.argmin(x)],
-           "top": mid[np.argmax(V[mid, 1])], "bottom": mid[np.argmin(V[mid, 1])]}
-    # an opening is level and as wide as it is for the template (within a factor 1.6);
-    # stray boundary edges (a decimated or torn mesh) are neither
-    l, r = V[out["left"]], V[out["right"]]
-    level = abs(l[1] - r[1]) < 0.12 and abs(l[2] - r[2]) < 0.15
-    if not level or not _WIDTH[len(half) and (half[0] > 0.5)] / 1.6 <= width \
-            <= 1.6 * _WIDTH[bool(half[0] > 0.5)]:
-        return None
-    return out
-
-
-# -- points no geometry marks: placed by proportion from the crisp ones ---------------------------
-#: Points along a contour the crisp points bound (the outer lips' intermediate points, the
-#: nostril base's ends), placed by the proportions of the Multi-PIE / iBUG 68-landmark
-#: convention (the one ICT-FaceKit's landmarks and users' face trackers follow) relative
-#: to the crisp points found, then dropped along z onto the skin's front.  (The brows and
-#: the chin's corners were placed so too, from the eyes' and the mouth's frames; carried
-#: by the registration they are better: :data:`TEMPLATE_SHIFT`.)  Each entry:
-#: ``id -> (frame, a, b)``; the frames (:func:`_convention_points`):
-#:
-#: - ``lip``: ``x = x(mid) + a (x(corner) - x(mid))``, ``y = y(corner) + b (y(mid) -
-#:   y(corner))``, mid 8.1 (upper) or 8.2 (lower), corner 8.3/8.4;
-#: - ``nose``: ``x = a`` half the outer canthi's distance (3.7-3.12) to that side,
-#:   ``y = y(9.15) + b`` that distance.
-#:
-#: The proportions are the means over 20 random ICT-FaceKit identities (seeds 101-120 of
-#: ``benchmarks/ict.py``'s identity draw, none of them used to judge the detector); in
-#: brackets the standard deviation of ``a`` and ``b`` over them.
-CONVENTION = {
-    "8.5": ("lip", 0.618, 0.776),      # upper lip, half way  [0.017, 0.049]
-    "8.10": ("lip", 0.288, 1.069),     # Cupid's bow peak     [0.012, 0.027]
-    "8.7": ("lip", 0.589, 0.766),      # lower lip, half way  [0.020, 0.061]
-    "9.5": ("nose", 0.276, 0.009),     # nostril base's end   [0.016, 0.005]
-}
-#: The mirror partners (the face's right side) of :data:`CONVENTION`.
-_CONVENTION_RIGHT = {"8.6": "8.5", "8.9": "8.10", "8.8": "8.7", "9.4": "9.5"}
-
-
-def _convention_points(Vt: np.ndarray, T: np.ndarray, pos: dict, crisp: set) -> dict:
-    """The :data:`CONVENTION` points (and their mirror partners) from the crisp points in
-    ``pos`` (template frame; only those in ``crisp`` are used), on the skin's front."""
-    want = {**{k: (k, 1.0) for k in CONVENTION}, **{k: (m, -1.0) for k, m in _CONVENTION_RIGHT.items()}}
-    corner = {1.0: "8.3", -1.0: "8.4"}
-    xy = {}
-    for k, (rule, side) in want.items():
-        frame, a, b = CONVENTION[rule]
-        if frame == "lip":
-            mid = "8.1" if rule in ("8.5", "8.10") else "8.2"
-            c = corner[side]
-            if mid not in crisp or c not in crisp:
-                continue
-            xy[k] = np.array([pos[mid][0] + a * (pos[c][0] - pos[mid][0]),
-                              pos[c][1] + b * (pos[mid][1] - pos[c][1])])
-        elif frame == "nose":
-            if not {"3.7", "3.12", "9.15"} <= crisp:
-                continue
-            half = 0.5 * abs(pos["3.7"][0] - pos["3.12"][0])
-            xy[k] = np.array([side * a * half, pos["9.15"][1] + b * 2 * half])
-    if not xy:
-        return {}
-    keys = list(xy)
-    z = frontview.front_at(Vt, T, np.array([xy[k] for k in keys]))
-    # on the face's front, not far behind where the registration put the point (one
-    # dropped into an opening would find the inside of the head, an eye separation or
-    # more behind)
-    return {k: np.array([*xy[k], zk]) for k, zk in zip(keys, z)
-            if np.isfinite(zk) and (k not in pos or zk > pos[k][2] - 0.6)}
-
-
-#: What the geometric rules miss of the landmark convention, per point: the median over
-#: training heads of (landmark point - found point) in the template frame (x the face's
-#: left, y up, z forward; eye separations), the face's right side mirrored onto its left
-#: (:data:`_MIRROR`).  Learned by ``python -m benchmarks.calibrate_points`` on identities
-#: of its own seeds (101-120; none of them the benchmark's regression draw or a fresh
-#: one), full and decimated, three rounds; each found point is moved by its shift and
-#: dropped back onto the skin (:func:`_shift_to_convention`).  They are where a rule's
-#: geometric mark and the annotators' habit part: a lid's margin point sits on the lid's
-#: rim behind its front edge; an inner lip corner deeper in the contact groove; the
-#: commissure and the nose tip a little above where the geometry marks them.
-CONVENTION_SHIFT: dict = {
-    "2.1": (+0.0000, -0.0186, -0.0157),
-    "2.2": (+0.0000, -0.0037, -0.0079),
-    "2.3": (+0.0000, +0.0033, -0.0046),
-    "2.4": (-0.0004, +0.0076, -0.0197),
-    "2.6": (-0.0081, -0.0083, -0.0251),
-    "2.8": (-0.0041, +0.0150, -0.0168),
-    "3.1": (+0.0109, -0.0033, -0.0056),
-    "3.3": (+0.0119, -0.0042, -0.0189),
-    "3.7": (+0.0064, -0.0048, -0.0149),
-    "3.11": (+0.0121, -0.0118, -0.0173),
-    "8.1": (-0.0001, +0.0083, +0.0041),
-    "8.2": (-0.0000, -0.0030, +0.0055),
-    "8.3": (-0.0003, +0.0183, +0.0054),
-    "8.5": (+0.0014, +0.0131, +0.0059),
-    "8.7": (+0.0021, +0.0028, +0.0030),
-    "8.10": (+0.0011, +0.0071, +0.0049),
-    "9.3": (+0.0001, +0.0133, +0.0010),
-    "9.5": (-0.0047, +0.0058, -0.0122),
-    "9.15": (-0.0000, +0.0068, -0.0030),
-}
-
-
-def _shift_to_convention(Vt: np.ndarray, T: np.ndarray, pos: dict, tie: dict,
-                         skin_ids: np.ndarray) -> None:
-    """Move each point of ``pos`` with a :data:`CONVENTION_SHIFT` (its mirror partner's,
-    x negated, on the right side) by it, onto the skin's closest point (in place)."""
-    keys, moved = [], []
-    for k in list(pos):
-        if k in CONVENTION_SHIFT:
-            d = np.asarray(CONVENTION_SHIFT[k], dtype=np.float64)
-        elif _MIRROR.get(k) in CONVENTION_SHIFT:
-            d = np.asarray(CONVENTION_SHIFT[_MIRROR[k]], dtype=np.float64) * [-1, 1, 1]
-        else:
-            continue
-        keys.append(k)
-        moved.append(pos[k] + d)
-    if not keys:
-        return
-    # back onto the sheet the point was on (a surface facing away counts 0.1 ES further)
-    tri, bary = onto_same_sheet(np.array([pos[k] for k in keys]), np.array(moved), Vt, T, 0.1)
-    on = np.einsum("nk,nkc->nc", bary, Vt[T[tri]])
-    near = cKDTree(Vt).query(on)[1]
-    for k, p, v in zip(keys, on, near):
-        pos[k], tie[k] = p, skin_ids[v]
 
 
 # -- the whole step --------------------------------------------------------------------------

@@ -37,10 +37,12 @@ Steps 1-3 are :mod:`~mpeg4fba.cloning.headframe`'s, 4 :mod:`~mpeg4fba.cloning.mi
    (:func:`~mpeg4fba.cloning.registration.register_surface`, coarse to fine), held at the
    points of steps 4-6, and every template point is carried to the closest point of the
    target's surface; the points of steps 4-6 then replace the carried ones.
-8. **Convention points** (:data:`CONVENTION`, :func:`_convention_points`): the points no
-   geometry marks (brows, chin corners, the outer lips' intermediate points, the nostril
-   base's ends) placed by the 68-landmark convention's proportions relative to the points
-   found, dropped onto the skin.
+8. **Convention points** (:mod:`~mpeg4fba.cloning.convention`): the points no geometry
+   marks (the outer lips' intermediate points, the nostril base's ends) placed by the
+   68-landmark convention's proportions relative to the points found, dropped onto the
+   skin; the brows and chin corners carried from the template
+   (:mod:`~mpeg4fba.cloning.template`) where the convention puts them; every found point
+   moved by what the geometric rules miss of the convention.
 9. **Parts**: eyeballs (the pupil: the most forward point of a closed round component in
    the eye), teeth and tongue (components where the template's are), when present.
 

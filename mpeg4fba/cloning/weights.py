@@ -256,7 +256,8 @@ def mapping_weights(source: Skin, target: Skin, correspondence: Correspondence,
     """The weights step: sparse (Nt, Ns) ``W``, rows the target's skin vertices, columns
     the source's, each row summing to 1; regions and sides from :func:`slit_labels`.  A
     target vertex whose side the mesh says weakly (``|side| < options.blend``) takes
-    both sides' weights, the upper side's by ``(1 + side / blend) / 2``."""
+    both sides' weights, the upper side's by ``(1 + side / blend) / 2``, unless it is a
+    feature point's."""
     src_uv, depth = source.space.uv, source.space.depth
     aligned = correspondence.aligned
     nt = len(aligned)
@@ -319,6 +320,11 @@ def mapping_weights(source: Skin, target: Skin, correspondence: Correspondence,
     if target_sides is not None and blend > 0:
         with np.errstate(invalid="ignore"):
             mixed = (treg != OUTSIDE) & (np.abs(target_sides) < blend)
+        # a feature point's vertex (a mouth corner's is where the field is held at 0) takes
+        # its side's motion whole: it is pinned onto the source's point, whose motion the
+        # FAPs define (blended, a snapped inner corner of an ICT head was 10.5 % of the eye
+        # distance off under jawOpen, 3.9 alone)
+        mixed[points] = False
     blocks, order = [], []
     for group_rows, source_meshes in mesh_groups(source, target, options.by_mesh):
         in_group = np.isin(tri_mesh, source_meshes)

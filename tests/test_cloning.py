@@ -288,8 +288,13 @@ def test_where_the_lips_meet_a_vertex_takes_both_sides_motion(source):
     plain = FacialMotionCloner(source, same, support=0.0, side_blend=0)
     side = blended.target_sides
     weak = np.flatnonzero(np.abs(np.nan_to_num(side, nan=1.0)) < 0.5)
-    assert len(weak) >= 2
+    # a feature point's vertex keeps its side's motion whole (pinned onto the source's)
+    points = blended.tgt.point_vertices()
     W, P = blended.weights, plain.weights
+    assert np.isin(points, weak).any()
+    assert abs(W[points] - P[points]).max() < 1e-12
+    weak = np.setdiff1d(weak, points)
+    assert len(weak) >= 2
     assert np.allclose(np.asarray(W.sum(axis=1)).ravel(), 1.0)
     other = np.setdiff1d(np.arange(W.shape[0]), weak)
     assert abs(W[other] - P[other]).max() < 1e-12            # the rest as before

@@ -293,6 +293,14 @@ def test_where_the_lips_meet_a_vertex_takes_both_sides_motion(source):
     W, P = blended.weights, plain.weights
     assert np.isin(points, weak).any()
     assert abs(W[points] - P[points]).max() < 1e-12
+    # even with every point vertex's field at 0 (a mid-lip point's two sides differ most)
+    from mpeg4fba.cloning.weights import mapping_weights
+    sides = side.copy()
+    sides[points] = 0.0
+    forced = mapping_weights(blended.src, blended.tgt, blended.correspondence,
+                             blended.source_regions, blended.target_regions,
+                             blended.weight_options, sides)
+    assert abs(forced[points] - P[points]).max() < 1e-12
     weak = np.setdiff1d(weak, points)
     assert len(weak) >= 2
     assert np.allclose(np.asarray(W.sum(axis=1)).ravel(), 1.0)

@@ -70,7 +70,8 @@ Two details the paper leaves open:
 * Where the field that settled a vertex is weak (:func:`slit_sides`, :data:`SIDE_BLEND`),
   round the corners mostly, the cloner gives it both sides' motion, by how clearly the
   field said its side, rather than all of the side a corner point a millimetre off
-  decided.
+  decided; a feature point's own vertex excepted (pinned onto the source's point, it
+  takes its side's motion whole).
 
 >>> uv = np.array([[0.0, 0.1], [0.0, -0.1], [0.5, 0.0]])
 >>> pts = {"2.4": (0.3, 0.0), "2.6": (0.15, 0.01), "2.2": (0, 0.01), "2.7": (-0.15, 0.01),

@@ -328,23 +328,19 @@ def mapping_weights(source: Skin, target: Skin, correspondence: Correspondence,
     blocks, order = [], []
     for group_rows, source_meshes in mesh_groups(source, target, options.by_mesh):
         in_group = np.isin(tri_mesh, source_meshes)
-        for which in np.unique(treg[group_rows]):
-            rows = group_rows[treg[group_rows] == which]
-            blocks.append(sided(rows, in_group, which))
-            order.append(rows)
-        rows = group_rows[mixed[group_rows]]
+        plain, rows = group_rows[~mixed[group_rows]], group_rows[mixed[group_rows]]
+        for which in np.unique(treg[plain]):
+            r = plain[treg[plain] == which]
+            blocks.append(sided(r, in_group, which))
+            order.append(r)
         # where a slit's sides meet: both sides' weights, by how clearly the mesh said it
         for up in np.unique(treg[rows] - 1 + treg[rows] % 2):
             r = rows[(treg[rows] == up) | (treg[rows] == up + 1)]
             a = np.clip(0.5 + 0.5 * target_sides[r] / blend, 0.0, 1.0)
             blocks.append(sp.diags(a) @ sided(r, in_group, up)
                           + sp.diags(1 - a) @ sided(r, in_group, up + 1))
-            order.append(r + nt)
+            order.append(r)
     w = sp.vstack(blocks).tocsr()
-    at = np.concatenate(order)
-    one = at < nt
     perm = np.empty(nt, dtype=np.int64)
-    perm[at[one]] = np.flatnonzero(one)
-    # a blended row stands in for the same row taken on one side
-    perm[at[~one] - nt] = np.flatnonzero(~one)
+    perm[np.concatenate(order)] = np.arange(nt)
     return w[perm]

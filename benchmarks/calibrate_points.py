@@ -39,7 +39,7 @@ from mpeg4fba.cloning import convention, detect, template  # noqa: E402
 from mpeg4fba.fba.featurepoints import point_order  # noqa: E402
 
 #: Left (or midline) point of each landmark-defined point's pair.
-_LEFT = {b: a for a, b in template._PAIRS}
+_LEFT = {b: a for a, b in template.PAIRS}
 
 
 def _seeds(text: str) -> list:
@@ -63,7 +63,7 @@ def residuals(data, seeds, shift: dict, template_shift: dict) -> dict:
     # the tables are read where they live, by the functions that use them
     old = convention.CONVENTION_SHIFT, template.TEMPLATE_SHIFT
     convention.CONVENTION_SHIFT, template.TEMPLATE_SHIFT = shift, template_shift
-    template._template.cache_clear()
+    template.reference_template.cache_clear()
     out: dict = {}
     try:
         for i, seed in enumerate(seeds):
@@ -89,7 +89,7 @@ def residuals(data, seeds, shift: dict, template_shift: dict) -> dict:
             print(f"  identity {seed} done", flush=True)
     finally:
         convention.CONVENTION_SHIFT, template.TEMPLATE_SHIFT = old
-        template._template.cache_clear()
+        template.reference_template.cache_clear()
     return out
 
 

@@ -9,6 +9,7 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
+from mpeg4fba.cloning import convention as C
 from mpeg4fba.cloning import detect as D
 from mpeg4fba.cloning import frontview as F
 from mpeg4fba.cloning import headframe as H
@@ -261,14 +262,14 @@ def test_convention_points_follow_their_proportions_on_a_flat_face():
            "8.4": [-0.35, -1.05, 1], "8.1": [0, -0.95, 1], "8.2": [0, -1.2, 1],
            "9.15": [0, -0.75, 1]}
     pos = {k: np.array(v, dtype=float) for k, v in pos.items()}
-    got = D._convention_points(V, T, pos, set(pos))
-    assert set(got) == set(D.CONVENTION) | set(D._CONVENTION_RIGHT)
-    _, a, b = D.CONVENTION["8.5"]                     # mid 8.1, corner 8.3
+    got = C.convention_points(V, T, pos, set(pos))
+    assert set(got) == set(C.CONVENTION) | set(C.CONVENTION_RIGHT)
+    _, a, b = C.CONVENTION["8.5"]                     # mid 8.1, corner 8.3
     assert got["8.5"][:2] == pytest.approx([a * 0.35, -1.05 + b * 0.1])
-    _, a, b = D.CONVENTION["9.5"]                     # half the canthi's distance 0.7
+    _, a, b = C.CONVENTION["9.5"]                     # half the canthi's distance 0.7
     assert got["9.5"][:2] == pytest.approx([a * 0.7, -0.75 + b * 1.4])
     # left and right mirror each other, and all lie on the skin
-    for k, m in D._CONVENTION_RIGHT.items():
+    for k, m in C.CONVENTION_RIGHT.items():
         assert got[k] == pytest.approx(got[m] * [-1, 1, 1])
     assert all(p[2] == pytest.approx(1.0) for p in got.values())
 

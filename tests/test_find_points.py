@@ -18,7 +18,8 @@ import pytest
 
 from mpeg4fba.cloning import (LIP_EDGE_POINTS, SNAP_POINTS, FaceNotFoundError, FoundPoints,
                               find_feature_points, snap_points)
-from mpeg4fba.cloning.detect import _anchors, _convention_points, _shift_to_convention
+from mpeg4fba.cloning.convention import convention_points, shift_to_convention
+from mpeg4fba.cloning.template import shift_anchors
 from mpeg4fba.cloning.frontview import groove, mouth_points
 from mpeg4fba.cloning.midline import menton, profile, profile_points
 from mpeg4fba.fba.face import FaceMesh, FaceModel
@@ -70,7 +71,7 @@ def _groove_rule(V: np.ndarray, T: np.ndarray, prof: dict) -> dict:
         return {}
     mouth = mouth_points(V, T, 0.5 * (prof["2.2"] + prof["2.3"]))
     if mouth:
-        _shift_to_convention(V, T, mouth, {}, np.arange(len(V)))
+        shift_to_convention(V, T, mouth, {}, np.arange(len(V)))
     return mouth
 
 
@@ -94,7 +95,7 @@ def groove_points(head: FaceModel) -> dict:
 def _errors(face: FaceModel, found: FoundPoints, truth_face: FaceModel) -> dict:
     """Point id -> error in % ES0, 2.1 against the menton rule (the profile's, as
     :func:`mpeg4fba.cloning.midline.profile_points` reads it) on the true skin, the
-    :data:`~mpeg4fba.cloning.detect.CONVENTION` points against their rule applied to the
+    :data:`~mpeg4fba.cloning.convention.CONVENTION` points against their rule applied to the
     true points."""
     es = float(np.linalg.norm(face.points["3.5"] - face.points["3.6"]))
     truth = {k: face.points[k] for k in face.points}
@@ -111,10 +112,10 @@ def _errors(face: FaceModel, found: FoundPoints, truth_face: FaceModel) -> dict:
     true_pos["2.1"] = chin / src_es - eyes
     mouth = _groove_rule(V, T, prof)
     true_pos.update(mouth)
-    conv = _convention_points(V, T, true_pos, set(true_pos))
+    conv = convention_points(V, T, true_pos, set(true_pos))
     # the brows and chin corners: the head's own point moved as the template's is
     # (TEMPLATE_SHIFT), on its skin
-    conv.update({k: b @ V[T[t]] for k, (t, b) in _anchors(V, T, true_pos).items()})
+    conv.update({k: b @ V[T[t]] for k, (t, b) in shift_anchors(V, T, true_pos).items()})
     scale = es / src_es
     M = _last_turn
     truth["2.1"] = chin @ M.T * scale

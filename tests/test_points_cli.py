@@ -58,10 +58,10 @@ def es(head) -> float:
 
 def _in_convention(head, k: str) -> np.ndarray:
     """The head's point ``k`` moved by the detector's CONVENTION_SHIFT (upright head)."""
-    from mpeg4fba.cloning import detect
-    d = detect.CONVENTION_SHIFT.get(k)
-    if d is None and detect._MIRROR.get(k) in detect.CONVENTION_SHIFT:
-        d = np.asarray(detect.CONVENTION_SHIFT[detect._MIRROR[k]]) * [-1, 1, 1]
+    from mpeg4fba.cloning import convention, template
+    d = convention.CONVENTION_SHIFT.get(k)
+    if d is None and template.MIRROR.get(k) in convention.CONVENTION_SHIFT:
+        d = np.asarray(convention.CONVENTION_SHIFT[template.MIRROR[k]]) * [-1, 1, 1]
     return head.points[k] + (0.0 if d is None else np.asarray(d) * es(head))
 
 

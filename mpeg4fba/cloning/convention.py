@@ -14,9 +14,10 @@ from scipy.spatial import cKDTree
 
 from . import frontview
 from .surface import onto_same_sheet
-from .template import _MIRROR
+from .template import MIRROR
 
-__all__ = ["CONVENTION", "CONVENTION_SHIFT"]
+__all__ = ["CONVENTION", "CONVENTION_RIGHT", "CONVENTION_SHIFT", "convention_points",
+           "shift_to_convention"]
 
 
 #: Points along a contour the crisp points bound (the outer lips' intermediate points, the
@@ -26,7 +27,7 @@ __all__ = ["CONVENTION", "CONVENTION_SHIFT"]
 #: the chin's corners were placed so too, from the eyes' and the mouth's frames; carried
 #: by the registration they are better:
 #: :data:`~mpeg4fba.cloning.template.TEMPLATE_SHIFT`.)  Each entry: ``id -> (frame, a,
-#: b)``; the frames (:func:`_convention_points`):
+#: b)``; the frames (:func:`convention_points`):
 #:
 #: - ``lip``: ``x = x(mid) + a (x(corner) - x(mid))``, ``y = y(corner) + b (y(mid) -
 #:   y(corner))``, mid 8.1 (upper) or 8.2 (lower), corner 8.3/8.4;
@@ -43,13 +44,13 @@ CONVENTION = {
     "9.5": ("nose", 0.276, 0.009),     # nostril base's end   [0.016, 0.005]
 }
 #: The mirror partners (the face's right side) of :data:`CONVENTION`.
-_CONVENTION_RIGHT = {"8.6": "8.5", "8.9": "8.10", "8.8": "8.7", "9.4": "9.5"}
+CONVENTION_RIGHT = {"8.6": "8.5", "8.9": "8.10", "8.8": "8.7", "9.4": "9.5"}
 
 
-def _convention_points(Vt: np.ndarray, T: np.ndarray, pos: dict, crisp: set) -> dict:
+def convention_points(Vt: np.ndarray, T: np.ndarray, pos: dict, crisp: set) -> dict:
     """The :data:`CONVENTION` points (and their mirror partners) from the crisp points in
     ``pos`` (template frame; only those in ``crisp`` are used), on the skin's front."""
-    want = {**{k: (k, 1.0) for k in CONVENTION}, **{k: (m, -1.0) for k, m in _CONVENTION_RIGHT.items()}}
+    want = {**{k: (k, 1.0) for k in CONVENTION}, **{k: (m, -1.0) for k, m in CONVENTION_RIGHT.items()}}
     corner = {1.0: "8.3", -1.0: "8.4"}
     xy = {}
     for k, (rule, side) in want.items():
@@ -80,10 +81,10 @@ def _convention_points(Vt: np.ndarray, T: np.ndarray, pos: dict, crisp: set) -> 
 #: What the geometric rules miss of the landmark convention, per point: the median over
 #: training heads of (landmark point - found point) in the template frame (x the face's
 #: left, y up, z forward; eye separations), the face's right side mirrored onto its left
-#: (``template._MIRROR``).  Learned by ``python -m benchmarks.calibrate_points`` on identities
+#: (``template.MIRROR``).  Learned by ``python -m benchmarks.calibrate_points`` on identities
 #: of its own seeds (101-120; none of them the benchmark's regression draw or a fresh
 #: one), full and decimated, three rounds; each found point is moved by its shift and
-#: dropped back onto the skin (:func:`_shift_to_convention`).  They are where a rule's
+#: dropped back onto the skin (:func:`shift_to_convention`).  They are where a rule's
 #: geometric mark and the annotators' habit part: a lid's margin point sits on the lid's
 #: rim behind its front edge; an inner lip corner deeper in the contact groove; the
 #: commissure and the nose tip a little above where the geometry marks them.
@@ -110,7 +111,7 @@ CONVENTION_SHIFT: dict = {
 }
 
 
-def _shift_to_convention(Vt: np.ndarray, T: np.ndarray, pos: dict, tie: dict,
+def shift_to_convention(Vt: np.ndarray, T: np.ndarray, pos: dict, tie: dict,
                          skin_ids: np.ndarray) -> None:
     """Move each point of ``pos`` with a :data:`CONVENTION_SHIFT` (its mirror partner's,
     x negated, on the right side) by it, onto the skin's closest point (in place)."""
@@ -118,8 +119,8 @@ def _shift_to_convention(Vt: np.ndarray, T: np.ndarray, pos: dict, tie: dict,
     for k in list(pos):
         if k in CONVENTION_SHIFT:
             d = np.asarray(CONVENTION_SHIFT[k], dtype=np.float64)
-        elif _MIRROR.get(k) in CONVENTION_SHIFT:
-            d = np.asarray(CONVENTION_SHIFT[_MIRROR[k]], dtype=np.float64) * [-1, 1, 1]
+        elif MIRROR.get(k) in CONVENTION_SHIFT:
+            d = np.asarray(CONVENTION_SHIFT[MIRROR[k]], dtype=np.float64) * [-1, 1, 1]
         else:
             continue
         keys.append(k)

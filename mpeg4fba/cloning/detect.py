@@ -101,10 +101,9 @@ from ..fba.face import FaceModel
 from ..fba.featurepoints import FeaturePointSet, normalise_id, point_order
 from ..fba.requirements import FAPU_POINTS, PART_POINTS, required_points
 from . import frontview, headframe, midline
-from .convention import (_CONVENTION_RIGHT, CONVENTION, CONVENTION_SHIFT,  # noqa: F401
-                         _convention_points, _shift_to_convention)
-from .template import (_MIRROR, _PAIRS, TEMPLATE_SHIFT, _anchors, _boundary_vertices,  # noqa: F401
-                       _opening_boxes, _opening_landmarks, _Template, _template)
+from .convention import convention_points, shift_to_convention
+from .template import (MIRROR, Template, boundary_vertices, opening_boxes, opening_landmarks,
+                       reference_template)
 from .headframe import FIT_LIMIT, SYMMETRY_LIMIT, FaceNotFoundError
 from .alignment import REQUIRED_POINTS
 from .parts import is_eyeball
@@ -196,7 +195,7 @@ def find_feature_points(face: FaceModel, *, ids: Optional[Iterable[str]] = None)
     Raises :class:`FaceNotFoundError` when the face is too unlike a face.
     """
     want = None if ids is None else {normalise_id(k) for k in ids}
-    tpl = _template()
+    tpl = reference_template()
     pieces = headframe.pieces(face)
     skin_mask = pieces.comp == pieces.skin
     skin_ids = np.flatnonzero(skin_mask)
@@ -264,12 +263,12 @@ def find_feature_points(face: FaceModel, *, ids: Optional[Iterable[str]] = None)
                 | set(prof_pts) | set(eye_pts))
     # from the crisp points, or where the registration put them when the geometry had
     # no mark (a mouth without a groove keeps the template's corners)
-    conv = _convention_points(Vt, ST, pos, set(pos))
+    conv = convention_points(Vt, ST, pos, set(pos))
     if conv:
         near = cKDTree(Vt).query(np.array(list(conv.values())))[1]
         for (k, p), v in zip(conv.items(), near):
             pos[k], tie[k] = p, skin_ids[v]
-    _shift_to_convention(Vt, ST, pos, tie, skin_ids)
+    shift_to_convention(Vt, ST, pos, tie, skin_ids)
     # 7.1 and other off-surface points: moved with the registration's displacement nearby
     for k, p in tpl.points.items():
         if k in pos or k in PART_OF:
@@ -307,7 +306,7 @@ def find_feature_points(face: FaceModel, *, ids: Optional[Iterable[str]] = None)
                        curves={k: inv(c) for k, c in lip_edges.items()})
 
 
-def _register(tpl: _Template, Vt: np.ndarray, ST: np.ndarray,
+def _register(tpl: Template, Vt: np.ndarray, ST: np.ndarray,
               profile: Optional[dict] = None) -> np.ndarray:
     """The template's skin bent onto the target's (template frame): started from a warp
     taking the template's mid-line profile points (:func:`~mpeg4fba.cloning.midline.profile_points`, both
@@ -326,11 +325,11 @@ def _register(tpl: _Template, Vt: np.ndarray, ST: np.ndarray,
             dst.append(p)
     if not src:
         src, dst = [tip], [tpl.V[tip]]
-    edge = _boundary_vertices(ST, len(Vt))
+    edge = boundary_vertices(ST, len(Vt))
     for name, (c, lm) in tpl.openings.items():
         if any(k in profile for k in frontview.EYE_KEYS.get(name, ("8.3", "8.4"))):
             continue                 # the eye's lid margins (mouth's corners) held already
-        got = _opening_landmarks(Vt, edge, c, _opening_boxes(tpl.points)[name][1])
+        got = opening_landmarks(Vt, edge, c, opening_boxes(tpl.points)[name][1])
         if got is None:
             continue
         for k, v in lm.items():
@@ -369,7 +368,7 @@ def _refine(Vt, ST, pos, tie, skin_ids, reasons, prof_has_tip: bool = False,
     return done
 
 
-def _parts(pieces: headframe.Pieces, s, R, t, X, tpl: _Template, pos, tie, reasons) -> set:
+def _parts(pieces: headframe.Pieces, s, R, t, X, tpl: Template, pos, tie, reasons) -> set:
     """Eyeball, teeth and tongue points from the components where the template has those
     parts (template frame); the kinds found."""
     found = set()
@@ -533,7 +532,7 @@ def _confidence(pos, resid, crisp_ok, reasons) -> dict:
         if k in crisp_ok:
             fit = 0.5 * (1 + fit)
         sym = 1.0
-        m = _MIRROR.get(k)
+        m = MIRROR.get(k)
         if m in pos:
             mis = float(np.linalg.norm(np.asarray(pos[k]) - np.asarray(pos[m]) * [-1, 1, 1]))
             sym = float(np.exp(-(mis / 0.08) ** 2))

@@ -21,7 +21,7 @@ from .parts import mesh_components
 from .surface import closest_points
 
 if TYPE_CHECKING:
-    from .detect import _Template
+    from .template import Template
 
 __all__ = ["FaceNotFoundError", "Pieces", "pieces", "head_frame", "mid_plane", "rotation",
            "face_checks", "FIT_LIMIT", "SYMMETRY_LIMIT", "NOSE_LIMIT"]
@@ -138,7 +138,7 @@ def _icp(tpl: np.ndarray, tpl_tree: cKDTree, tgt: np.ndarray, tgt_tree: cKDTree,
     return s, R, t, float(score)
 
 
-def head_frame(skin_v: np.ndarray, tpl: "_Template", ST: Optional[np.ndarray] = None) -> tuple:
+def head_frame(skin_v: np.ndarray, tpl: "Template", ST: Optional[np.ndarray] = None) -> tuple:
     """(s, R, t, score) of the best similarity from the target's skin (model coordinates)
     to the template frame, over the 24 axis-aligned starts."""
     rng = np.random.default_rng(1)

@@ -1,9 +1,9 @@
 """The detector's template: the reference head in the template frame (x the face's left,
 y up, z forward; eye separations), with its points, openings and profile, and where the
 landmark convention puts the points no geometry marks before the registration carries
-them (:data:`TEMPLATE_SHIFT`).  Built once per process (:func:`_template`).
+them (:data:`TEMPLATE_SHIFT`).  Built once per process (:func:`reference_template`).
 
->>> tpl = _template()
+>>> tpl = reference_template()
 >>> round(float(np.linalg.norm(tpl.points["3.5"] - tpl.points["3.6"])), 6), "mouth" in tpl.openings
 (1.0, True)
 """
@@ -18,23 +18,24 @@ import numpy as np
 from . import frontview, midline
 from .surface import closest_points
 
-__all__ = ["TEMPLATE_SHIFT"]
+__all__ = ["TEMPLATE_SHIFT", "PAIRS", "MIRROR", "Template", "reference_template", "shift_anchors",
+           "boundary_vertices", "opening_boxes", "opening_landmarks"]
 
 # left/right pairs (the face's left first): mirror partners of the shifts, and the
 # symmetry part of the detector's confidence
-_PAIRS = (("2.4", "2.5"), ("2.6", "2.7"), ("2.8", "2.9"), ("2.11", "2.12"), ("2.13", "2.14"),
+PAIRS = (("2.4", "2.5"), ("2.6", "2.7"), ("2.8", "2.9"), ("2.11", "2.12"), ("2.13", "2.14"),
           ("3.1", "3.2"), ("3.3", "3.4"), ("3.5", "3.6"), ("3.7", "3.12"), ("3.11", "3.8"),
           ("3.9", "3.10"), ("3.13", "3.14"), ("4.1", "4.2"), ("4.3", "4.4"), ("4.5", "4.6"),
           ("5.1", "5.2"), ("5.3", "5.4"), ("8.3", "8.4"), ("8.5", "8.6"), ("8.7", "8.8"),
           ("8.10", "8.9"), ("9.1", "9.2"), ("9.5", "9.4"), ("9.7", "9.6"), ("9.13", "9.14"),
           ("10.1", "10.2"), ("10.3", "10.4"), ("10.5", "10.6"), ("10.7", "10.8"),
           ("10.9", "10.10"), ("11.2", "11.3"))
-_MIRROR = {a: b for a, b in _PAIRS} | {b: a for a, b in _PAIRS}
+MIRROR = {a: b for a, b in PAIRS} | {b: a for a, b in PAIRS}
 
 
 # -- the template --------------------------------------------------------------------------
 @dataclass(frozen=True)
-class _Template:
+class Template:
     V: np.ndarray          # skin vertices, template frame, eye separations
     T: np.ndarray
     points: dict           # id -> position (template frame, ES units)
@@ -50,7 +51,7 @@ class _Template:
 
 
 @lru_cache(maxsize=1)
-def _template() -> _Template:
+def reference_template() -> Template:
     from ..models.reference_head import reference_head
     head = reference_head(resolution=1.0)
     es = float(np.linalg.norm(head.points["3.5"] - head.points["3.6"]))
@@ -78,18 +79,18 @@ def _template() -> _Template:
                           & (V[:, 1] > chin[1] - 0.1) & (np.abs(V[:, 0]) < 1.1))
     face = face[::max(1, len(face) // 1500)]
     openings = {}
-    edge = _boundary_vertices(T, len(V))
-    for name, (c, half) in _opening_boxes(pts).items():
-        got = _opening_landmarks(V, edge, c, half)
+    edge = boundary_vertices(T, len(V))
+    for name, (c, half) in opening_boxes(pts).items():
+        got = opening_landmarks(V, edge, c, half)
         if got is not None:
             openings[name] = (c, {k: int(v) for k, v in got.items()})
-    anchors = _anchors(V, T, pts)
+    anchors = shift_anchors(V, T, pts)
     prof = midline.profile_points(midline.profile(V, T, 0.6, -2.5), 0.0)
     eyes = {}
     for name, keys in frontview.EYE_KEYS.items():
         got = frontview.eye_opening(V, T, 0.5 * (pts[keys[0]] + pts[keys[1]]), name == "left eye")
         eyes.update({k: got[r] for k, r in zip(keys, ("out", "in", "top", "bottom")) if r in got})
-    return _Template(V, T, pts, skin_index, parts, sample, face, openings, es, prof, eyes,
+    return Template(V, T, pts, skin_index, parts, sample, face, openings, es, prof, eyes,
                      anchors)
 
 
@@ -110,12 +111,12 @@ TEMPLATE_SHIFT: dict = {
 }
 
 
-def _anchors(V: np.ndarray, T: np.ndarray, pts: dict) -> dict:
+def shift_anchors(V: np.ndarray, T: np.ndarray, pts: dict) -> dict:
     """{id: (triangle, barycentric)}: each :data:`TEMPLATE_SHIFT` point (and its mirror
     partner) moved by its shift onto the template's skin."""
     keys, moved = [], []
     for k, d in TEMPLATE_SHIFT.items():
-        for kk, sign in ((k, 1.0), (_MIRROR.get(k), -1.0)):
+        for kk, sign in ((k, 1.0), (MIRROR.get(k), -1.0)):
             if kk is not None and kk in pts:
                 keys.append(kk)
                 moved.append(pts[kk] + np.asarray(d, dtype=np.float64) * [sign, 1, 1])
@@ -129,7 +130,7 @@ def _anchors(V: np.ndarray, T: np.ndarray, pts: dict) -> dict:
 _WIDTH = {False: 0.30, True: 0.64}
 
 
-def _opening_boxes(pts: dict) -> dict:
+def opening_boxes(pts: dict) -> dict:
     """Opening name -> (centre, half sizes) of the box searched for it, template frame."""
     mouth = 0.5 * (pts["8.3"] + pts["8.4"])
     out = {"mouth": (mouth, np.array([0.9, 0.4, 0.8]))}
@@ -138,7 +139,7 @@ def _opening_boxes(pts: dict) -> dict:
     return out
 
 
-def _boundary_vertices(T: np.ndarray, n: int) -> np.ndarray:
+def boundary_vertices(T: np.ndarray, n: int) -> np.ndarray:
     """(n,) True at the vertices on a boundary edge (an edge of one triangle)."""
     e = np.sort(np.concatenate([T[:, [0, 1]], T[:, [1, 2]], T[:, [2, 0]]]), axis=1)
     key = e[:, 0] * n + e[:, 1]
@@ -150,7 +151,7 @@ def _boundary_vertices(T: np.ndarray, n: int) -> np.ndarray:
     return out
 
 
-def _opening_landmarks(V: np.ndarray, edge: np.ndarray, centre: np.ndarray,
+def opening_landmarks(V: np.ndarray, edge: np.ndarray, centre: np.ndarray,
                        half: np.ndarray) -> Optional[dict]:
     """{"out", "in", "top", "bottom"} -> vertex of the opening (boundary vertices) in the
     box round ``centre`` (template frame): its lateral extremes, and its top and bottom

@@ -52,7 +52,9 @@ from ..fba.fapu import FAPU
 from ..fba.fat import FAT
 from ..fba.featurepoints import FeaturePointSet
 from ..fba.tables import FEATURE_POINTS
-from . import _parts
+from ._parts import BROW, HAIR, LIP, SKIN, eyeball, hairline, mouth_cavity, teeth
+# (the part builders named as the parts they make, which are local names here)
+from ._parts import hair as hair_mesh, spine as spine_mesh, tongue as tongue_mesh
 from ._rig import low_level_tables
 from ._shape import Design, smoothstep
 from ._skin import PATCH_LEFT_EYE, PATCH_MOUTH, PATCH_RIGHT_EYE, build_skin
@@ -80,11 +82,11 @@ def _skin_colors(skin, d: Design) -> np.ndarray:
     V = skin.vertices
     points = {k: V[i] for k, i in skin.points.items()}
     x, y, z = V.T
-    col = np.tile(_parts.SKIN, (len(V), 1))
+    col = np.tile(SKIN, (len(V), 1))
     mouth = skin.patch == PATCH_MOUTH
     # lips: the vermilion (t <= 1) and the tuck, shading into skin at the border
     lip = np.where(mouth, 1.0 - smoothstep((skin.t - 0.92) / 0.16), 0.0)
-    col = col * (1 - lip[:, None]) + _parts.LIP * lip[:, None]
+    col = col * (1 - lip[:, None]) + LIP * lip[:, None]
     # cheeks
     for sgn in (1, -1):
         dist = np.linalg.norm(V - points["5.1" if sgn > 0 else "5.2"], axis=1)
@@ -102,10 +104,10 @@ def _skin_colors(skin, d: Design) -> np.ndarray:
             * smoothstep((b + 0.06) / 0.08) * (1 - smoothstep((b - 1.02) / 0.08)) * (z > 40)
         lids = ((skin.patch == PATCH_LEFT_EYE) | (skin.patch == PATCH_RIGHT_EYE)) & (skin.t < 1.3)
         inside = inside * ~lids
-        col = col * (1 - 0.8 * inside[:, None]) + _parts.BROW * 0.8 * inside[:, None]
+        col = col * (1 - 0.8 * inside[:, None]) + BROW * 0.8 * inside[:, None]
     # under the hair
-    under = smoothstep((_parts.hairline(x, y, z) + 4.0) / 11.0)
-    col = col * (1 - under[:, None]) + _parts.HAIR * under[:, None]
+    under = smoothstep((hairline(x, y, z) + 4.0) / 11.0)
+    col = col * (1 - under[:, None]) + HAIR * under[:, None]
     return col
 
 
@@ -138,15 +140,15 @@ def _build(face_width: float, jaw: float, nose: float, eye_spacing: float, mouth
     # teeth, tongue and mouth behind the lips
     lips_z = V[skin.points["2.2"], 2]
     teeth_z = lips_z - 10.5
-    eye = _parts.eyeball(d, resolution)
-    upper = _parts.teeth(d, teeth_z, True, resolution)
-    lower = _parts.teeth(d, teeth_z, False, resolution)
+    eye = eyeball(d, resolution)
+    upper = teeth(d, teeth_z, True, resolution)
+    lower = teeth(d, teeth_z, False, resolution)
     tip_z = lower.vertices[lower.points["9.11"], 2] - 3.0
-    tongue = _parts.tongue(d, tip_z, resolution)
-    mouth = _parts.mouth_cavity(d, teeth_z, resolution)
-    spine = _parts.spine(d)
+    tongue = tongue_mesh(d, tip_z, resolution)
+    mouth = mouth_cavity(d, teeth_z, resolution)
+    spine = spine_mesh(d)
     skin_colors = _skin_colors(skin, d)
-    hair, hair_over = _parts.hair(V, skin.triangles, skin_colors)
+    hair, hair_over = hair_mesh(V, skin.triangles, skin_colors)
     skin_i = skin.points["11.4"]
     hair_top = int(np.flatnonzero(hair_over == skin_i)[0])
     centres = {"LeftEye": d.eye_centre(1), "RightEye": d.eye_centre(-1)}

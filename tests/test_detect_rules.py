@@ -123,6 +123,24 @@ def test_parted_lips_give_two_inner_lip_points_either_side_of_the_gap():
     assert -1.04 < pts["2.2"][1] < -1.0 and -1.11 < pts["2.3"][1] < -1.06
 
 
+def test_an_open_mouth_gives_inner_lip_points_either_side_of_its_opening():
+    # the jaw dropped: a gap 0.17 ES tall (taller than a slit, SLIT_LIMIT) and the lower
+    # lip below it 0.15 ES further back than it stands on a closed mouth, behind the
+    # upper lip's front by more than a parting's depth (ICT's jawOpen at 0.3 does both:
+    # read as closed lips, 2.3 went 17-21 % of the eye separation off)
+    drop = lambda Y: np.where((Y < -1.2) & (Y > -1.65), -0.15 + _bump(Y, -1.27, 0.08, 0.04), 0.0)
+    V, T = _face(resolution=0.005, extra=drop)
+    c = V[T].mean(1)
+    T = T[~((c[:, 1] > -1.2) & (c[:, 1] < -1.03))]
+    Vb, Tb = _grid(np.arange(-1.0, 1.0 + 1e-9, 0.05), np.arange(-1.3, -0.9, 0.01),
+                   lambda X, Y: X * 0 + 0.3)
+    V2, T2 = np.vstack([V, Vb]), np.vstack([T, Tb + len(V)])
+    pts = M.profile_points(M.profile(V2, T2, 0.6, -2.4), 0.0)
+    assert -1.04 < pts["2.2"][1] < -1.0 and -1.23 < pts["2.3"][1] < -1.19
+    assert pts["2.3"][2] > 0.8                                 # on the lip, not inside
+    assert -1.4 < pts["8.2"][1] < pts["2.3"][1]
+
+
 def test_the_fall_under_a_lower_lip_is_no_parting():
     # the lower lip's underside falls steeply (5 ES per ES) from y = -1.26, behind the
     # lips' front by more than a parting's depth within reach of the upper lip, and
@@ -252,6 +270,25 @@ def test_lips_groove_ends_at_the_commissures():
     V2, T2 = _grid(np.arange(-0.8, 0.8, 0.02), np.arange(-1.3, -0.8, 0.01),
                    lambda X, Y: 1.0 - 0.3 * X ** 2)
     assert F.mouth_points(V2, T2, np.array([0.0, -1.05, 1.0])) == {}
+
+
+def test_an_open_mouths_inner_corners_lie_between_its_lips():
+    # the lips' groove of the test above, opened into a lens 0.16 ES tall at the mid
+    # line that closes at the commissures: still 0.04 ES tall where the inner corners
+    # go, which lie between the lips there, not on the upper lip's edge
+    def z(X, Y):
+        depth = 0.03 * np.clip((0.37 - np.abs(X)) / 0.02, 0, 1)
+        return 1.0 - 0.3 * X ** 2 - depth * np.exp(-0.5 * ((Y + 1.05) / 0.015) ** 2)
+    V, T = _grid(np.arange(-0.8, 0.8 + 1e-9, 0.005), np.arange(-1.3, -0.8, 0.005), z)
+    c = V[T].mean(1)
+    half = 0.08 * np.clip(1 - (c[:, 0] / 0.36) ** 2, 0, None)
+    T = T[~(np.abs(c[:, 1] + 1.05) < half)]
+    got = F.mouth_points(V, T, np.array([0.0, -1.05, 1.0]))
+    assert got["8.3"][0] == pytest.approx(0.36, abs=0.02)
+    assert got["2.4"][0] == pytest.approx(F.INNER_CORNER * got["8.3"][0], abs=0.015)
+    for k in ("2.4", "2.5"):
+        assert got[k][1] == pytest.approx(-1.05, abs=0.01), k
+    assert got["2.6"][1] > -1.05 + 0.03 and got["2.8"][1] < -1.05 - 0.03
 
 
 def test_convention_points_follow_their_proportions_on_a_flat_face():

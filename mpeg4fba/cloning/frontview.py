@@ -210,7 +210,12 @@ def mouth(Vt: np.ndarray, T: np.ndarray, stomion: np.ndarray) -> tuple:
         # 0.045-0.055 ES inside the commissures whether or not it is there)
         k = int(np.argmin([abs(abs(cx(i)) - INNER_CORNER * abs(cx(ie))) for i, _ in g]))
         ic, jc = g[k]
-        p = at(ic, jc, 1) if not np.isfinite(F[ic, jc]) else at(ic, jc)
+        if np.isfinite(F[ic, jc]):
+            p = at(ic, jc)
+        else:
+            # open there: between the lips' edges above and below
+            pu, pd = at(ic, jc, 1), at(ic, jc, -1)
+            p = None if pu is None or pd is None else 0.5 * (pu + pd)
         if p is not None:
             out[inner] = p
         # half way along the groove (arc length, in 3D) to the inner corner

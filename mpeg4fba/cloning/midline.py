@@ -20,6 +20,7 @@ import numpy as np
 from .surface import vertex_normals
 
 __all__ = ["Profile", "profile", "profile_points", "plane_cut", "menton", "PROFILE_STEP",
+           "PARTING_REACH", "SLIT_LIMIT", "PARTING_LIMIT",
            "NOSE_FALL"]
 
 
@@ -53,6 +54,25 @@ PROFILE_STEP = 0.01
 #: such peak below the eye line, so an upper lip that falls as far to the stomion, below
 #: it, is never taken for it.
 NOSE_FALL = 0.1
+#: The lips' parting on the mid-plane profile (:func:`profile_points`): a run of the raw
+#: front 0.12 ES or more behind the upper lip's, within this far (eye separations) below
+#: the upper lip's front (8.1): 1.0, room for a mouth open as wide as ICT's jawOpen at
+#: full weight (a 0.6 ES gap).
+PARTING_REACH = 1.0
+#: A run no taller than this (eye separations) is a slit between lips that nearly meet,
+#: and ends where the front comes back within 0.12 ES of the upper lip's: 0.12 (a closed
+#: mouth's slit is 0.01-0.03).  A taller one is an open mouth, which ends at the first
+#: step forward onto a lip, however far back that lip stands (an open jaw takes the
+#: lower lip back with it, 0.1-0.2 ES behind the upper lip's front on ICT's jawOpen at
+#: 0.3-0.5, so it never comes back within 0.12: read as closed lips, 2.3 went 17-21 %
+#: of the eye separation off, and at jawOpen 0.5, 8.2 onto the back of the mouth).  An
+#: open mouth is entered by a step back of 0.12 ES or more in one step and left by such
+#: a step forward (a lower lip's underside falls steeply but smoothly).
+SLIT_LIMIT = 0.12
+#: The tallest opening read as parted lips (eye separations): 0.8.  MPEG-4's neutral face
+#: has its lips closed, but heads as people model or scan them often have the mouth a
+#: little open; a wide-open one (jawOpen 1.0 on ICT: 0.6 ES) is still read.
+PARTING_LIMIT = 0.8
 
 
 def plane_cut(V: np.ndarray, T: np.ndarray, x0: float = 0.0) -> tuple:
@@ -151,8 +171,9 @@ def profile_points(prof: Profile, eye_y: float, lips_ok=None) -> dict:
     - 2.2 and 2.3 (the inner lips' middles): where the lips meet, the deepest point
       between 8.1 and 8.2 when the lips touch; when they part (the profile steps back
       more than 0.12 ES into the mouth between them, and comes forward again below: a
-      fall that does not is the lower lip's underside), the upper lip's lowest and the
-      lower lip's highest front points, either side of the gap.  When no groove runs the
+      fall that does not is the lower lip's underside; a slit or an open mouth,
+      :data:`SLIT_LIMIT`), the upper lip's lowest and the lower lip's highest front
+      points, either side of the gap.  When no groove runs the
       mouth's width from that meeting, a crease above the first bump from which one does
       is taken (an upper lip with no bump: the first bump was the lower lip's);
     - 9.15 (subnasale): the point furthest behind the chord from the nose tip to 8.1
@@ -202,24 +223,35 @@ def profile_points(prof: Profile, eye_y: float, lips_ok=None) -> dict:
     # first crease at least a fifth as sharp as the sharpest within 0.35 ES below 8.1
     ref = zz[ul]
     span = slice(ul, min(ul + win, len(zz) - 1) + 1)
-    deep = ~(rz[span] > ref - 0.12)
+    reach = rz[ul:min(ul + int(PARTING_REACH / PROFILE_STEP), len(zz) - 1) + 1]
+    deep = ~(reach > ref - 0.12)
     if deep.any():
         g0 = int(np.argmax(deep))                       # the first run of deep bins
-        run = np.flatnonzero(~deep[g0:])
-        if not len(run):
+        back = np.flatnonzero(~deep[g0:])
+        # a slit ends where the front is back near the upper lip's; an open mouth at the
+        # first step forward onto a lip (SLIT_LIMIT)
+        g1 = g0 + int(back[0]) - 1 if len(back) else None
+        if g1 is None or g1 - g0 + 2 > SLIT_LIMIT / PROFILE_STEP:
+            with np.errstate(invalid="ignore"):
+                onto = np.isfinite(reach[1:]) & ~(reach[:-1] > reach[1:] - 0.12)
+                into = ~(reach[1:] > reach[:-1] - 0.12)
+            ends = np.flatnonzero(~deep[g0 + 1:] | onto[g0:])
+            # an open mouth is entered by a step back too (a lower lip's underside
+            # falling steeply to the labiomental fold is no opening)
+            g1 = g0 + int(ends[0]) if len(ends) and into[max(g0 - 1, 0):g0 + 1].any() else None
+        if g1 is None:
             # no lower lip below it within reach: the fall under the lower lip, or the
             # chin's, not a parting
             deep[:] = False
         else:
-            g1 = g0 + run[0] - 1
             up, lo = ul + g0 - 1, ul + g1 + 1
     if deep.any():
         # the lips part where the front steps back (a jump of 0.04 ES in one step, or no
         # cut at all); a smooth fall (the labiomental fold of a retruded lower lip), or a
-        # "gap" taller than 0.12 ES, is no parting
+        # "gap" taller than PARTING_LIMIT, is no parting
         r = rz[up:lo + 1]
         jump = ~np.isfinite(r).all() or np.nanmax(np.abs(np.diff(r))) > 0.04
-        if not jump or lo - up > 0.12 / PROFILE_STEP:
+        if not jump or lo - up > PARTING_LIMIT / PROFILE_STEP:
             deep[:] = False
     if not deep.any():
         c = d2[span]

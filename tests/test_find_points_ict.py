@@ -354,3 +354,31 @@ def test_heads_once_misread_are_read(data, detect, draw, index, variant):
     assert "raised" not in res, res["raised"]
     worst = max(res["errors"], key=res["errors"].get)
     assert res["errors"][worst] < MISREAD_BOUND, (worst, res["errors"][worst], res["placement"])
+
+
+#: Open mouths: ICT's jawOpen added to a random person's neutral (the lips 0.1-0.6 eye
+#: separations apart).  Read as closed lips, 2.3 went 17-21 % ES0 off at 0.3, and at 0.5
+#: 8.2 went onto the back of the mouth (250 % off).
+OPEN_MOUTHS = [(5353, 0.3), (6161, 0.6)]
+
+
+@pytest.mark.parametrize("seed,jaw", OPEN_MOUTHS, ids=[f"{s}-jaw{j}" for s, j in OPEN_MOUTHS])
+def test_an_open_mouth_is_read_and_said_to_be_open(data, detect, seed, jaw):
+    from mpeg4fba.cli.points import describe_found
+    V = ict.identity(data, seed) + jaw * data.expressions["jawOpen"]
+    face = ict.ict_face(data, V)
+    es = float(np.linalg.norm(face.points["3.5"] - face.points["3.6"]))
+    lm = ict.landmark_points(data, V)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        found = detect.find_feature_points(ict.placed_face(face, None))
+    err = {k: float(np.linalg.norm(found.points[k] - lm[k]) / es * 100) for k in lm}
+    assert err["2.2"] < 5 and err["2.3"] < 5, err
+    assert max(err.values()) < 10, max(err.items(), key=lambda kv: kv[1])
+    gap = lm["2.2"][1] - lm["2.3"][1]
+    assert found.points["2.2"][1] - found.points["2.3"][1] == pytest.approx(gap, rel=0.25)
+    assert any("mouth is open" in n for n in found.notes)
+    assert "note: the mouth is open" in describe_found(found, "the head")
+    # a closed mouth says nothing of the kind
+    closed = detect.find_feature_points(ict.placed_face(ict.ict_face(data, ict.identity(data, seed)), None))
+    assert closed.notes == ()

@@ -79,6 +79,8 @@ def _say_points(report, target: str, where: str) -> None:
         same = "; put in the source's convention" if not report.kept else ""
         click.echo(f"{name}: {how} on its geometry (lowest confidence {conf:.2f}: {worst}{same}); "
                    f"wrote them to {where} (review: mpeg4fba points {target} --points {where} --edit)")
+    for note in (report.found.notes if report.found is not None else ()):
+        click.echo(f"{os.path.basename(target)}: note: {note}")
 
 
 @main.command("clone", epilog="\b\nExamples:\n  mpeg4fba clone target.wrl -o animated.wrl"

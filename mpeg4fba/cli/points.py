@@ -51,6 +51,8 @@ def describe_found(found, what: str, seconds: Optional[float] = None) -> str:
     if found.missing:
         why = sorted({found.reasons.get(k, "") for k in found.missing} - {""})
         text += f"; not on this head: {_ids(found.missing)}" + (f" ({'; '.join(why)})" if why else "")
+    for note in found.notes:
+        text += f"; note: {note}"
     return text
 
 

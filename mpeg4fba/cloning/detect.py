@@ -162,6 +162,9 @@ class FoundPoints:
         lip's edge along the mouth's slit seen from the front, from the right corner to
         the left, when the geometry has a contact groove
         (:func:`~mpeg4fba.cloning.snapping.snap_points`).
+    notes : tuple
+        What the user should know about the head as found (an open mouth: MPEG-4's
+        neutral face has its lips closed).
     """
 
     points: FeaturePointSet
@@ -173,6 +176,7 @@ class FoundPoints:
     scale: float
     fit: dict = field(default_factory=dict, compare=False)
     curves: dict = field(default_factory=dict, compare=False)
+    notes: tuple = ()
 
     def lowest(self) -> tuple:
         """(id, confidence) of the least confident point found."""
@@ -221,9 +225,17 @@ def find_feature_points(face: FaceModel, *, ids: Optional[Iterable[str]] = None)
     prof_pts = midline.profile_points(midline.profile(Vt, ST, 0.6, -2.5), 0.0,
                                       lambda p: bool(frontview.mouth_points(Vt, ST, p)))
     eye_pts = frontview.eye_points(Vt, ST, tpl)
+    notes = []
+    if "2.2" in prof_pts and prof_pts["2.2"][1] - prof_pts["2.3"][1] > midline.SLIT_LIMIT:
+        gap = float(prof_pts["2.2"][1] - prof_pts["2.3"][1])
+        notes.append(f"the mouth is open (lips {gap:.2f} eye separations, about "
+                     f"{gap * TEMPLATE_ES_MM:.0f} mm, apart): MPEG-4's neutral face has the "
+                     "lips closed, so lip and jaw FAPs move them from where they are; close "
+                     "the mouth in the head for the standard's neutral")
     lip_edges: dict = {}
     if "2.2" in prof_pts:
-        mouth_pts, lip_edges = frontview.mouth(Vt, ST, 0.5 * (prof_pts["2.2"] + prof_pts["2.3"]))
+        mouth_pts, lip_edges = frontview.mouth(Vt, ST, 0.5 * (prof_pts["2.2"] + prof_pts["2.3"]),
+                                               prof_pts["2.2"][1] - prof_pts["2.3"][1])
         eye_pts.update(mouth_pts)
     X = _register(tpl, Vt, ST, {**prof_pts, **eye_pts})
     reasons: dict = {}
@@ -303,7 +315,7 @@ def find_feature_points(face: FaceModel, *, ids: Optional[Iterable[str]] = None)
                        up, fwd, float(scale),
                        fit={"score": score, "s": s, "R": R, "t": t, "deformed": X,
                             "opening_pupils": opening_pupils},
-                       curves={k: inv(c) for k, c in lip_edges.items()})
+                       curves={k: inv(c) for k, c in lip_edges.items()}, notes=tuple(notes))
 
 
 def _register(tpl: Template, Vt: np.ndarray, ST: np.ndarray,

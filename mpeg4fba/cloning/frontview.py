@@ -150,7 +150,7 @@ def mouth_points(Vt: np.ndarray, T: np.ndarray, stomion: np.ndarray) -> dict:
     return mouth(Vt, T, stomion)[0]
 
 
-def mouth(Vt: np.ndarray, T: np.ndarray, stomion: np.ndarray) -> tuple:
+def mouth(Vt: np.ndarray, T: np.ndarray, stomion: np.ndarray, gap: float = 0.0) -> tuple:
     """(points, lip edges): the mouth's corners from the lips' contact groove seen from the front (template
     frame): the groove (:func:`groove`) of the skin's depth map followed from the
     stomion (the profile's lips' meeting) to each side; its ends are the commissures
@@ -162,9 +162,11 @@ def mouth(Vt: np.ndarray, T: np.ndarray, stomion: np.ndarray) -> tuple:
     every column of the groove, from the right corner to the left: where each lip meets
     the other or ends at the opening, seen from the front.  ({}, {}) without a groove a
     mouth's width (0.45 to 1.4 ES) whose ends lie symmetrically about the mid line
-    (within 15 % of its width)."""
-    lo = np.array([-0.75, stomion[1] - 0.2, stomion[2] - 0.6])
-    hi = np.array([0.75, stomion[1] + 0.2])
+    (within 15 % of its width).  ``gap``: how far apart the lips are at the mid line
+    (an open mouth's), so that the map reaches both."""
+    half = max(0.2, 0.5 * gap + 0.1)
+    lo = np.array([-0.75, stomion[1] - half, stomion[2] - 0.6])
+    hi = np.array([0.75, stomion[1] + half])
     D = depth_map(Vt, T, lo, hi)
     F = np.where(np.isnan(D), -np.inf, D)
     i0 = int((0.0 - lo[0]) / DEPTH_CELL)

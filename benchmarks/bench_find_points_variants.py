@@ -21,7 +21,10 @@ its eyeballs and its own random placement (:func:`benchmarks.ict.random_placemen
   original one);
 - ``noise 0.2 mm``: every Skin vertex moved by Gaussian noise of 0.2 mm per axis (a
   scan's);
-- ``dense x4``: each Skin triangle split in four (about 45,000 Skin vertices).
+- ``dense x4``: each Skin triangle split in four (about 45,000 Skin vertices);
+- ``seams``: the Skin cut into three texture islands, each border vertex given once per
+  island (:func:`benchmarks.ict.cut_at_seams`: how a glTF exporter stores a textured
+  head).
 
 Truth: the points ICT's 68 landmarks define (:data:`benchmarks.ict.LANDMARK_POINTS`) on
 the head's own surface (posed for the jaw and smile heads, the identity's for the
@@ -63,7 +66,7 @@ VARIANT_SEEDS = tuple(B.fresh_seeds(8080, 6))
 POSES = {"jaw 0.15": {"jawOpen": 0.15}, "jaw 0.3": {"jawOpen": 0.3},
          "jaw 0.6": {"jawOpen": 0.6}, "jaw 1.0": {"jawOpen": 1.0},
          "smile 0.5": {"mouthSmile_L": 0.5, "mouthSmile_R": 0.5}}
-VARIANTS = ("closed", *POSES, "quadric 0.3", "noise 0.2 mm", "dense x4")
+VARIANTS = ("closed", *POSES, "quadric 0.3", "noise 0.2 mm", "dense x4", "seams")
 #: The variants whose heads keep ICT's vertices, so the cloning has its truth.
 CLONED = ("closed", *POSES, "noise 0.2 mm")
 #: Scan noise, cm per axis (ICT is in cm at life size).
@@ -107,6 +110,8 @@ def make_head(data, V: np.ndarray, variant: str, seed: int) -> tuple:
                           skin.triangles), V
     if variant == "dense x4":
         return _with_skin(face, *subdivide(skin.vertices, skin.triangles)), V
+    if variant == "seams":
+        return ict.cut_at_seams(face)[0], V
     return face, V
 
 

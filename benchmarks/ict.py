@@ -844,6 +844,46 @@ MAX_TILT = 20.0
 EYEBALLS = ("LeftEyeball", "RightEyeball")
 
 
+def cut_at_seams(face: FaceModel, mesh: str = "Skin") -> tuple:
+    """``face`` with ``mesh`` cut into texture islands as a glTF exporter stores a
+    textured head: front, back left and back right, every vertex on an island's border
+    given once per island (the copies after the mesh's own vertices); (cut face, without
+    a FAT, the original vertex of each of the cut mesh's vertices).
+
+    >>> from mpeg4fba.models import reference_head
+    >>> head = reference_head(resolution=0.5)
+    >>> cut, origin = cut_at_seams(head)
+    >>> n = len(head.meshes["Skin"].vertices)
+    >>> len(origin) > n, bool((origin[:n] == range(n)).all())
+    (True, True)
+    """
+    m = face.meshes[mesh]
+    V, T = m.vertices, m.triangles
+    c = V[T].mean(1)
+    mid = np.median(V[:, 2])
+    island = np.where(c[:, 2] > mid, 0, np.where(c[:, 0] > 0, 1, 2))
+    corner = np.repeat(island, 3)
+    # the first island to use a vertex keeps it; the others get a copy
+    owner = np.full(len(V), -1)
+    for k in (0, 1, 2):
+        free = (owner[T.ravel()] == -1) & (corner == k)
+        owner[T.ravel()[free]] = k
+    owner[owner < 0] = 0
+    flat = T.ravel()
+    key = flat * 3 + corner
+    other = corner != owner[flat]
+    copies = np.unique(key[other])
+    flat = np.where(other, len(V) + np.searchsorted(copies, key), flat)
+    origin = np.r_[np.arange(len(V)), copies // 3]
+    out = face.copy()
+    out.meshes[mesh] = FaceMesh(mesh, V[origin], flat.reshape(-1, 3), m.parent, m.color)
+    out.points = FeaturePointSet({k: face.points[k] for k in face.points}, dict(face.points.vertices))
+    out.fat = FAT()
+    if mesh in face.colors and np.ndim(face.colors[mesh]) == 2:
+        out.colors[mesh] = np.asarray(face.colors[mesh])[origin]
+    return out, origin
+
+
 def _axis(name: str) -> np.ndarray:
     v = np.zeros(3)
     v["XYZ".index(name[1])] = 1.0 if name[0] == "+" else -1.0

@@ -108,6 +108,7 @@ from .headframe import FIT_LIMIT, SYMMETRY_LIMIT, FaceNotFoundError
 from .alignment import REQUIRED_POINTS
 from .parts import is_eyeball
 from .registration import register_surface
+from .seams import weld_seams
 from .surface import closest_points, feature_warp
 
 __all__ = ["FaceNotFoundError", "FoundPoints", "find_feature_points", "PART_OF",
@@ -200,8 +201,10 @@ def find_feature_points(face: FaceModel, *, ids: Optional[Iterable[str]] = None)
     """
     want = None if ids is None else {normalise_id(k) for k in ids}
     tpl = reference_template()
-    pieces = headframe.pieces(face)
+    # a surface cut at texture seams is one surface (cloning.seams)
+    pieces = headframe.pieces(weld_seams(face).face)
     skin_mask = pieces.comp == pieces.skin
+    skin_mask[np.setdiff1d(np.arange(len(skin_mask)), pieces.T.ravel())] = False  # seam copies
     skin_ids = np.flatnonzero(skin_mask)
     # skin triangles, renumbered
     tri_skin = skin_mask[pieces.T[:, 0]]

@@ -81,6 +81,7 @@ from .part_motion import PartMapping
 from .parts import PART_SPECS, find_parts, match_parts, separate_parts, source_transform
 from .points import REQUIRED_POINTS, check_faces, required_points_missing
 from .projection import MOUTH_ANGLE
+from .seams import weld_seams
 from .skin import Skin
 from .registration import REGISTRATION_MEMBRANE
 from .transfer import map_skin, mesh_entries, motion_scale, source_skin_motion
@@ -136,8 +137,9 @@ class PreparedSource:
             check_placement(source, "source")
         self.face = source
         self.positions, self.mouth_angle = positions, mouth_angle
-        #: the source with its parts split off (the mapping's source)
-        self.separated = separate_parts(source)
+        #: the source with its parts split off (the mapping's source), its seams joined
+        #: (:mod:`~mpeg4fba.cloning.seams`)
+        self.separated = separate_parts(weld_seams(source).face)
         self.parts = find_parts(self.separated)
         #: the Transform carrying each part's motion (None: its meshes move alone)
         self.transforms = {p: source_transform(self.separated, m) for p, m in self.parts.items()}
@@ -291,6 +293,10 @@ class FacialMotionCloner:
         positions = "global" if positions is None else positions
         mouth_angle = MOUTH_ANGLE if mouth_angle is None else mouth_angle
         check_faces(source, target)
+        #: the target with its seams joined, which the cloner works on
+        #: (:mod:`~mpeg4fba.cloning.seams`); :meth:`clone` gives the triangles back
+        self.welding = weld_seams(target)
+        target = self.welding.face
         check_choice("outside", outside, OUTSIDE_RULES)
         self.outside = outside
         check_choice("overlap", overlap, OVERLAP_RULES)
@@ -370,6 +376,9 @@ class FacialMotionCloner:
         self.weights = mapping_weights(self.src, self.tgt, self.correspondence,
                                        self.source_regions, self.target_regions,
                                        self.weight_options, self.target_sides)
+        if self.welding.count:
+            # a vertex's later copies (in no triangle now) move with its first
+            self.weights = self.weights[self.welding.rows(self.tgt.offsets, self.weights.shape[0])]
         # 6. (in clone) the parts' motion
         self.part_mapping = PartMapping(self.src, self.tgt, self.source_parts,
                                         self.target_parts, self.source_transforms,
@@ -487,7 +496,7 @@ class FacialMotionCloner:
                           f"{'them' if len(lacking) > 1 else 'it'} nowhere the target's skin "
                           f"maps to, or not at all): FAP{'s' if len(faps) > 1 else ''} "
                           f"{_runs(faps)} not cloned", CloneWarning, stacklevel=2)
-        return out
+        return self.welding.face_back(out)
 
     def _skip_notes(self, skipped: dict, fat: FAT) -> list:
         """One message per kind of part the target lacks (eyeballs, teeth, tongue): why,

@@ -70,7 +70,7 @@ def pieces(face: FaceModel) -> Pieces:
         if not len(m.vertices) or not len(m.triangles):
             continue
         v = face.world_vertices(n)
-        lab = mesh_components(m.triangles, len(v))
+        lab = mesh_components(m.triangles, len(v), m.vertices)
         verts.append(v)
         tris.append(np.asarray(m.triangles, dtype=np.int64) + first)
         mesh_of.append(np.full(len(v), len(names)))

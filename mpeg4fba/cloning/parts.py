@@ -162,9 +162,12 @@ def is_eyeball(vertices: np.ndarray, max_radius: float = np.inf) -> bool:
     return float(np.sqrt(np.mean((r - radius) ** 2))) <= EYEBALL_ROUNDNESS * radius
 
 
-def mesh_components(triangles: np.ndarray, n_vertices: int) -> np.ndarray:
+def mesh_components(triangles: np.ndarray, n_vertices: int,
+                    vertices: Optional[np.ndarray] = None) -> np.ndarray:
     """(n_vertices,) label of each vertex's connected component (vertices joined by
-    triangle edges; a vertex in no triangle is a component of its own).
+    triangle edges; a vertex in no triangle is a component of its own, or with
+    ``vertices`` given, that of a vertex in a triangle at exactly its place: a seam's
+    later copy, :mod:`~mpeg4fba.cloning.seams`).
 
     >>> mesh_components(np.array([[0, 1, 2], [3, 4, 5], [2, 6, 0]]), 8).tolist()
     [0, 0, 0, 1, 1, 1, 0, 2]
@@ -173,7 +176,19 @@ def mesh_components(triangles: np.ndarray, n_vertices: int) -> np.ndarray:
     a = np.concatenate([t[:, 0], t[:, 1]])
     b = np.concatenate([t[:, 1], t[:, 2]])
     graph = sp.coo_matrix((np.ones(len(a)), (a, b)), shape=(n_vertices, n_vertices))
-    return connected_components(graph, directed=False)[1]
+    lab = connected_components(graph, directed=False)[1]
+    if vertices is not None and len(t):
+        used = np.zeros(n_vertices, dtype=bool)
+        used[t.ravel()] = True
+        if not used.all():
+            _, inv = np.unique(np.asarray(vertices), axis=0, return_inverse=True)
+            inv = inv.ravel()
+            owner = np.full(int(inv.max()) + 1, -1)
+            owner[inv[used]] = lab[used]
+            loose = ~used & (owner[inv] >= 0)
+            lab = lab.copy()
+            lab[loose] = owner[inv[loose]]
+    return lab
 
 
 @dataclass
@@ -503,7 +518,7 @@ def _stacked(face: FaceModel) -> tuple:
     for n, m in face.meshes.items():
         if not len(m.vertices):
             continue
-        lab = mesh_components(m.triangles, len(m.vertices))
+        lab = mesh_components(m.triangles, len(m.vertices), m.vertices)
         labels[n] = lab
         offsets[n] = first
         verts.append(face.world_vertices(n))

@@ -16,7 +16,7 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.spatial import cKDTree
 
-__all__ = ["closest_points", "point_triangle", "feature_warp", "boundary_loops", "neck_cut",
+__all__ = ["closest_points", "point_triangle", "feature_warp", "boundary_loops", "boundary_vertices", "neck_cut",
            "loop_correspondence", "vertex_normals", "triangle_normals", "triangle_edges",
            "surface_weights", "triangle_neighbours", "onto_same_sheet"]
 
@@ -165,6 +165,18 @@ def feature_warp(moving: np.ndarray, fixed: np.ndarray, points: np.ndarray) -> n
     warp = RBFInterpolator(m[keep], f[keep] - m[keep], kernel="thin_plate_spline")
     p = np.asarray(points, dtype=np.float64)
     return p + warp(p)
+
+
+def boundary_vertices(T: np.ndarray, n: int) -> np.ndarray:
+    """(n,) True at the vertices on a boundary edge (an edge of one triangle)."""
+    e = np.sort(np.concatenate([T[:, [0, 1]], T[:, [1, 2]], T[:, [2, 0]]]), axis=1)
+    key = e[:, 0] * n + e[:, 1]
+    u, cnt = np.unique(key, return_counts=True)
+    once = u[cnt == 1]
+    out = np.zeros(n, dtype=bool)
+    out[once // n] = True
+    out[once % n] = True
+    return out
 
 
 def boundary_loops(triangles: np.ndarray) -> list:

@@ -16,7 +16,7 @@ from typing import Optional
 import numpy as np
 
 from . import frontview, midline
-from .surface import closest_points
+from .surface import boundary_vertices, closest_points
 
 __all__ = ["TEMPLATE_SHIFT", "PAIRS", "MIRROR", "Template", "reference_template", "shift_anchors",
            "boundary_vertices", "opening_boxes", "opening_landmarks"]
@@ -136,18 +136,6 @@ def opening_boxes(pts: dict) -> dict:
     out = {"mouth": (mouth, np.array([0.9, 0.4, 0.8]))}
     for name, (a, b) in (("left eye", ("3.7", "3.11")), ("right eye", ("3.12", "3.8"))):
         out[name] = (0.5 * (pts[a] + pts[b]), np.array([0.32, 0.22, 0.5]))
-    return out
-
-
-def boundary_vertices(T: np.ndarray, n: int) -> np.ndarray:
-    """(n,) True at the vertices on a boundary edge (an edge of one triangle)."""
-    e = np.sort(np.concatenate([T[:, [0, 1]], T[:, [1, 2]], T[:, [2, 0]]]), axis=1)
-    key = e[:, 0] * n + e[:, 1]
-    u, cnt = np.unique(key, return_counts=True)
-    once = u[cnt == 1]
-    out = np.zeros(n, dtype=bool)
-    out[once // n] = True
-    out[once % n] = True
     return out
 
 

@@ -62,6 +62,17 @@ def test_copies_a_fat_moves_apart_stay_apart():
     assert w.face.meshes["Skin"].triangles.tolist() == [[0, 1, 2], [3, 5, 2]]
 
 
+def test_points_are_found_on_a_triangle_soup(head):
+    soup, origin = triangle_soup(head)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        whole = find_feature_points(head)
+        found = find_feature_points(soup)
+    es = float(np.linalg.norm(head.points["3.5"] - head.points["3.6"]))
+    assert set(found.points) == set(whole.points)
+    assert max(np.linalg.norm(found.points[k] - whole.points[k]) for k in whole.points) < 0.02 * es
+
+
 def test_points_are_found_on_a_head_cut_at_seams(head, cut):
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
@@ -78,11 +89,27 @@ def test_points_are_found_on_a_head_cut_at_seams(head, cut):
             assert np.allclose(V[i], head.meshes["Skin"].vertices[whole.points.vertex(k)[1]]), k
 
 
-def test_a_head_cut_at_seams_clones_as_the_whole_one_and_keeps_its_mesh(cut):
+def triangle_soup(face: FaceModel, mesh: str = "Skin") -> tuple:
+    """``face`` with every triangle of ``mesh`` given its own three vertices (an STL
+    file's way); (face, without a FAT, the original vertex of each new vertex)."""
+    m = face.meshes[mesh]
+    origin = m.triangles.ravel()
+    out = face.copy()
+    out.meshes[mesh] = FaceMesh(mesh, m.vertices[origin], np.arange(len(origin)).reshape(-1, 3),
+                                m.parent, m.color)
+    out.points = FeaturePointSet({k: face.points[k] for k in face.points})   # no ties
+    out.fat = FAT()
+    if mesh in face.colors and np.ndim(face.colors[mesh]) == 2:
+        out.colors[mesh] = np.asarray(face.colors[mesh])[origin]
+    return out, origin
+
+
+@pytest.mark.parametrize("how", [cut_at_seams, triangle_soup], ids=["seams", "soup"])
+def test_a_head_cut_apart_clones_as_the_whole_one_and_keeps_its_mesh(how):
     source = reference_head(resolution=0.6)
     target = reference_head(resolution=0.5, face_width=1.1, nose=0.9, seed=3)
     target.fat = FAT()
-    face, origin = cut_at_seams(target)
+    face, origin = how(target)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         whole = FacialMotionCloner(source, target).clone()

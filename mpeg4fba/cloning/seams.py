@@ -3,7 +3,8 @@
 A glTF file stores a vertex once per texture island and per hard edge it lies on (its
 attributes are per vertex), so the skin of a textured head comes in pieces that touch
 without sharing a vertex; OBJ and VRML writers that do not share coordinates do the
-same.  What the detector and the cloner read off the mesh's connections (its pieces,
+same, and an STL file (or a mesh converted from one) gives every triangle its own three
+vertices.  What the detector and the cloner read off the mesh's connections (its pieces,
 the eye and mouth openings as boundaries, the neck's cut, the registration's stiffness)
 would see cuts that are not there: on an ICT head cut into three texture islands the
 detector found no face at all, and the cloner's mean error rose by 60 %.
@@ -13,8 +14,10 @@ that has an earlier copy (the same position exactly, both on an open edge, as se
 leave them; parts welded into one mesh that touch keep their own vertices) moved onto
 that copy, triangles so collapsed or doubled dropped.  Vertices keep their rows (the
 later copies are then in no triangle), so every per-vertex result still has the face's
-own rows; the cloner gives each copy its first copy's motion, and the face it writes
-has the triangles it was given.  Coincident vertices that a face's FAT moves differently
+own rows; the cloner gives each copy its first copy's motion (and holds a feature
+point at a vertex in some triangle: :class:`~mpeg4fba.cloning.skin.Skin`), and the face
+it writes has the triangles it was given.  On an ICT head as triangle soup, the cloner's
+errors are the whole head's (mean 0.046 % of the eye distance, max 4.45).  Coincident vertices that a face's FAT moves differently
 (lips modelled touching, whose tables part them) are distinct points of the surface and
 stay apart.
 

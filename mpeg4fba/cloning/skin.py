@@ -98,16 +98,22 @@ class Skin:
         rows = set()
         if not len(self.vertices):
             return np.zeros(0, dtype=np.int64)
-        tree = cKDTree(self.vertices)
+        # (vertices in some triangle: a seam's later copy is in none, cloning.seams)
+        on = np.unique(self.triangles) if len(self.triangles) else np.arange(len(self.vertices))
+        tree = cKDTree(self.vertices[on])
         tol = 0.01 * float(self.face.fapu.ES0)
         for fp in self.face.points:
             tie = self.face.points.vertex(fp)
             if tie is not None and tie[0] in self.offsets:
-                rows.add(self.offsets[tie[0]][0] + int(tie[1]))
+                r = self.offsets[tie[0]][0] + int(tie[1])
+                if r < len(self.vertices):
+                    i = np.searchsorted(on, r)
+                    rows.add(r if i < len(on) and on[i] == r
+                             else int(on[tree.query(self.vertices[r])[1]]))
                 continue
             d, i = tree.query(self.face.points[fp])
             if d <= tol:
-                rows.add(int(i))
+                rows.add(int(on[i]))
         return np.array(sorted(rows), dtype=np.int64)
 
     @cached_property

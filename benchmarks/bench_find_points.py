@@ -640,6 +640,14 @@ class _Tee:
         return "".join(self.parts)
 
 
+def write_result(path: Path, text: str) -> None:
+    """``text`` written to ``path`` (its folder made) atomically, and said."""
+    from mpeg4fba._atomic import atomic_write
+    path.parent.mkdir(parents=True, exist_ok=True)
+    atomic_write(path, text)
+    print(f"wrote {path}")
+
+
 def git_commit() -> str:
     try:
         return subprocess.run(["git", "-C", str(ROOT), "rev-parse", "--short", "HEAD"],
@@ -807,17 +815,13 @@ def main(argv=None) -> int:
                 *[f"- {line.lstrip('# ')}" for line in head[:4]],
                 f"- wall time {wall / 60:.1f} min", "", tables.text.strip(), "",
                 "### Per head", "", "```", *head[4:], "```", ""]
-        args.md.parent.mkdir(parents=True, exist_ok=True)
-        args.md.write_text("\n".join(page), encoding="utf-8")
-        print(f"wrote {args.md}")
+        write_result(args.md, "\n".join(page))
     if args.json:
         doc = {"detector": det.name, "real_detector": det.real, "draw": draw, "seeds": seeds,
                "commit": git_commit(), "wall_seconds": wall, "goals": GOALS,
                "landmark_table": {k: list(v[:2]) + [v[2]] for k, v in ict.LANDMARK_POINTS.items()},
                "summary": summary, "cases": cases, "cloning": pairs, "noise": noise_rows}
-        args.json.parent.mkdir(parents=True, exist_ok=True)
-        args.json.write_text(json.dumps(doc, indent=1, default=float) + "\n", encoding="utf-8")
-        print(f"wrote {args.json}")
+        write_result(args.json, json.dumps(doc, indent=1, default=float) + "\n")
     return 0
 
 

@@ -259,15 +259,11 @@ def main(argv=None) -> int:
                 "Written by `python -m benchmarks.bench_find_points_variants` (see its docstring).", "",
                 *[f"- {line.lstrip('# ')}" for line in head[:3]], f"- wall time {wall / 60:.1f} min",
                 "", tables.text.strip(), "", "### Per head", "", "```", *head[3:], "```", ""]
-        args.md.parent.mkdir(parents=True, exist_ok=True)
-        args.md.write_text("\n".join(page), encoding="utf-8")
-        print(f"wrote {args.md}")
+        B.write_result(args.md, "\n".join(page))
     if args.json:
         doc = {"draw": draw, "seeds": seeds, "commit": B.git_commit(), "wall_seconds": wall,
                "summary": summary, "heads": rows}
-        args.json.parent.mkdir(parents=True, exist_ok=True)
-        args.json.write_text(json.dumps(doc, indent=1, default=float) + "\n", encoding="utf-8")
-        print(f"wrote {args.json}")
+        B.write_result(args.json, json.dumps(doc, indent=1, default=float) + "\n")
     return 0
 
 

@@ -24,7 +24,11 @@ its eyeballs and its own random placement (:func:`benchmarks.ict.random_placemen
 - ``dense x4``: each Skin triangle split in four (about 45,000 Skin vertices);
 - ``seams``: the Skin cut into three texture islands, each border vertex given once per
   island (:func:`benchmarks.ict.cut_at_seams`: how a glTF exporter stores a textured
-  head).
+  head);
+- ``holes``: three holes of radius 0.1 ES cut in the Skin's front, off the mid line and
+  away from the landmark points (a scan's, on the cheeks and brows); ``nose hole``: one
+  of radius 0.15 ES on the nose tip (a shiny tip's), which the detector should refuse
+  with its reason rather than read.
 
 Truth: the points ICT's 68 landmarks define (:data:`benchmarks.ict.LANDMARK_POINTS`) on
 the head's own surface (posed for the jaw and smile heads, the identity's for the
@@ -66,7 +70,8 @@ VARIANT_SEEDS = tuple(B.fresh_seeds(8080, 6))
 POSES = {"jaw 0.15": {"jawOpen": 0.15}, "jaw 0.3": {"jawOpen": 0.3},
          "jaw 0.6": {"jawOpen": 0.6}, "jaw 1.0": {"jawOpen": 1.0},
          "smile 0.5": {"mouthSmile_L": 0.5, "mouthSmile_R": 0.5}}
-VARIANTS = ("closed", *POSES, "quadric 0.3", "noise 0.2 mm", "dense x4", "seams")
+VARIANTS = ("closed", *POSES, "quadric 0.3", "noise 0.2 mm", "dense x4", "seams", "holes",
+            "nose hole")
 #: The variants whose heads keep ICT's vertices, so the cloning has its truth.
 CLONED = ("closed", *POSES, "noise 0.2 mm")
 #: Scan noise, cm per axis (ICT is in cm at life size).
@@ -112,7 +117,30 @@ def make_head(data, V: np.ndarray, variant: str, seed: int) -> tuple:
         return _with_skin(face, *subdivide(skin.vertices, skin.triangles)), V
     if variant == "seams":
         return ict.cut_at_seams(face)[0], V
+    if variant in ("holes", "nose hole"):
+        return _with_skin(face, skin.vertices, _holes(face, variant, seed)), V
     return face, V
+
+
+def _holes(face, variant: str, seed: int) -> np.ndarray:
+    """The Skin's triangles with holes cut: "holes", three of radius 0.1 ES on the face's
+    front, 0.25 ES or more from the mid line and from every landmark point (a scan's
+    holes on the cheeks and brows); "nose hole", one of radius 0.15 ES on the nose tip."""
+    skin = face.meshes["Skin"]
+    c = skin.vertices[skin.triangles].mean(1)
+    P = face.points
+    es = float(np.linalg.norm(P["3.5"] - P["3.6"]))
+    if variant == "nose hole":
+        centres, radius = P["9.3"][None], 0.15
+    else:
+        L = np.array([P[k] for k in B.LANDMARK_IDS if k in P])
+        front = np.flatnonzero((c[:, 2] > np.percentile(c[:, 2], 70))
+                               & (np.abs(c[:, 0]) > 0.25 * es))
+        far = np.min(np.linalg.norm(c[front][:, None] - L[None], axis=2), axis=1) > 0.35 * es
+        rng = np.random.default_rng([seed, 5])
+        centres, radius = c[rng.choice(front[far], 3, replace=False)], 0.1
+    d = np.min(np.linalg.norm(c[:, None] - centres[None], axis=2), axis=1)
+    return skin.triangles[d > radius * es]
 
 
 def run_head(det, data, source, src_found, ident, variant: str, pl, clone: bool) -> dict:

@@ -23,6 +23,7 @@ from mpeg4fba.cloning.template import shift_anchors
 from mpeg4fba.cloning.frontview import groove, mouth_points
 from mpeg4fba.cloning.midline import menton, profile, profile_points
 from mpeg4fba.fba.face import FaceMesh, FaceModel
+from mpeg4fba.fba.fat import FAT
 from mpeg4fba.fba.featurepoints import FeaturePointSet
 from mpeg4fba.models import reference_head
 
@@ -324,6 +325,48 @@ def test_a_non_face_is_refused_with_a_reason(kind):
         find_feature_points(_non_face(kind))
     # the message says what was missing
     assert any(w in str(e.value) for w in ("no bilateral symmetry", "no nose", "not head-shaped"))
+
+
+def _holed(head: FaceModel, centres, radius: float) -> FaceModel:
+    """``head`` as a dumb mesh with the skin's triangles within ``radius`` (eye
+    separations) of ``centres`` cut out (a scan's holes)."""
+    es = float(np.linalg.norm(head.points["3.5"] - head.points["3.6"]))
+    m = head.meshes["Skin"]
+    c = m.vertices[m.triangles].mean(1)
+    d = np.min(np.linalg.norm(c[:, None] - np.asarray(centres)[None], axis=2), axis=1)
+    out = head.copy()
+    out.meshes["Skin"] = FaceMesh("Skin", m.vertices, m.triangles[d > radius * es], m.parent)
+    out.points, out.fat, out.colors = FeaturePointSet(), FAT(), {}
+    return out
+
+
+def test_a_hole_where_the_nose_is_is_said_not_guessed():
+    # read, the nose's hole had put the mouth's corners 40 % of the eye distance off and
+    # 2.1 80 %, at confidences up to 0.8
+    head = reference_head(resolution=0.5, seed=3)
+    with pytest.raises(FaceNotFoundError, match="hole on its mid line where the nose is"):
+        find_feature_points(_holed(head, [head.points["9.3"]], 0.15))
+    # holes off the mid line (a cheek, the forehead) are read through
+    es = float(np.linalg.norm(head.points["3.5"] - head.points["3.6"]))
+    cheek = head.points["5.3"] + [0.1 * es, 0, 0]
+    brow = head.points["4.1"] + [0, 0.3 * es, 0]
+    found = find_feature_points(_holed(head, [cheek, brow], 0.12))
+    worst = max(np.linalg.norm(found.points[k] - head.points[k]) for k in ("3.8", "8.3", "2.2", "9.3"))
+    assert worst < 0.08 * es
+
+
+def test_eyeballs_away_from_the_eyes_found_say_the_face_was_misread():
+    from mpeg4fba.cloning import detect as D
+    head = reference_head(resolution=0.5, seed=3)
+    # the eyes' lids found a whole eye separation above their eyeballs
+    pos = {k: np.array(v, dtype=float) for k, v in
+           {"3.5": [0.5, 0, 1], "3.7": [0.7, 1, 1], "3.11": [0.3, 1, 1], "3.1": [0.5, 1.1, 1],
+            "3.3": [0.5, 0.9, 1]}.items()}
+    with pytest.raises(FaceNotFoundError, match="misread"):
+        D._eyes_round_their_eyeballs(pos)
+    pos["3.5"] = np.array([0.52, 0.95, 1.0])
+    D._eyes_round_their_eyeballs(pos)                  # round it: fine
+    assert find_feature_points(head).points            # a whole head passes both checks
 
 
 def test_an_empty_face_is_refused():

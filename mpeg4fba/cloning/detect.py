@@ -7,8 +7,9 @@ Steps 1-3 are :mod:`~mpeg4fba.cloning.headframe`'s, 4 :mod:`~mpeg4fba.cloning.mi
 5 and 6 :mod:`~mpeg4fba.cloning.frontview`'s.
 
 1. **Pieces** (:func:`~mpeg4fba.cloning.headframe.pieces`): every mesh cut into
-   connected components; the skin is the component of the largest area, the others are
-   candidate parts (eyeballs, teeth, tongue, lashes...).
+   connected components, its texture seams joined first (:mod:`~mpeg4fba.cloning.seams`);
+   the skin is the component of the largest area, the others are candidate parts
+   (eyeballs, teeth, tongue, lashes...).
 2. **Head frame** (:func:`~mpeg4fba.cloning.headframe.head_frame`): the reference head's
    skin (:func:`mpeg4fba.models.reference_head`, the template, which carries all 84 points) is
    fitted to the target's skin by a trimmed, two-way similarity ICP (rotation, translation,
@@ -24,8 +25,10 @@ Steps 1-3 are :mod:`~mpeg4fba.cloning.headframe`'s, 4 :mod:`~mpeg4fba.cloning.mi
    :func:`~mpeg4fba.cloning.midline.profile_points`): the front of the skin's cut by
    the mid plane, read from the eye line down: the nose tip (the first peak that falls
    like a nose: an upper lip as forward as the nose is never taken for it), subnasale,
-   the upper lip's front, the lips' meeting (a crease or a parting; the crease from which
-   a groove runs the mouth's width), the lower lip's vermilion edge, the menton.
+   the upper lip's front, the lips' meeting (a crease, a slit or an open mouth's parting;
+   the crease from which a groove runs the mouth's width), the lower lip's vermilion
+   edge, the menton.  A hole in the skin where the nose is is refused
+   (:data:`NOSE_SPAN`): read, it put everything below it wrong.
 5. **Eyes** (:func:`~mpeg4fba.cloning.frontview.eye_opening`): each eye's opening seen
    from the front (a depth map of the skin, :func:`~mpeg4fba.cloning.frontview.depth_map`:
    a hole, or the skin's edge round an eyeball that is another piece): corners at its lateral ends (the inner one where the groove beyond it
@@ -45,6 +48,8 @@ Steps 1-3 are :mod:`~mpeg4fba.cloning.headframe`'s, 4 :mod:`~mpeg4fba.cloning.mi
    moved by what the geometric rules miss of the convention.
 9. **Parts**: eyeballs (the pupil: the most forward point of a closed round component in
    the eye), teeth and tongue (components where the template's are), when present.
+   Eyeballs found elsewhere than the eyes, or lids found away from their eyeball
+   (:data:`EYE_LAYOUT_LIMIT`), mean the face was misread, and say so.
 
 Units: the work is done in the template's frame (x the face's left, y up, z forward) in
 units of the template's eye separation; results are returned in the face's own units and

@@ -454,7 +454,7 @@ def test_file_errors(obj_set, tmp_path, neutral):
     assert e.value.path == str(tmp_path / "jaw.obj")
     assert "no FAP named 'jaw'" in e.value.message and "mapping" in e.value.message
     with pytest.raises(FormatError, match="unknown morph-target file type"):
-        read_morph_targets(neutral_path, [tmp_path / "open_jaw@10.ply"])
+        read_morph_targets(neutral_path, [tmp_path / "open_jaw@10.xyz"])
     # an extra vertex and triangle in the teeth
     bigger = {"Skin": neutral["Skin"], "Teeth": np.vstack([neutral["Teeth"], [[2, 2, 0]]])}
     tris = {"Skin": _grid_triangles(6), "Teeth": np.vstack([_grid_triangles(3), [[8, 7, 9]]])}

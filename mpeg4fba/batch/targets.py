@@ -51,7 +51,7 @@ class Target:
 
 def _stem(path: str) -> str:
     base = os.path.basename(path.rstrip("/\\")) or "face"
-    for suffix in (".gz", ".wrz", ".wrl", ".obj", ".glb", ".gltf", ".fap"):
+    for suffix in (".gz", ".wrz", ".wrl", ".obj", ".glb", ".gltf", ".ply", ".stl", ".off", ".fap"):
         if base.lower().endswith(suffix) and len(base) > len(suffix):
             base = base[: -len(suffix)]
     # a folder name anyone's shell and file system takes

@@ -58,7 +58,7 @@ COMMANDS = {
             "frames, fps, duration and per-FAP min/max of a .fap animation; meshes, FAT and "
             "bounding box of a face in a .glb, .gltf or .obj file.",
     "play": "Play STREAM on FACE and write the animation (the output's extension says how).",
-    "points": "Find the MPEG-4 feature points on HEAD (.obj, .glb, .gltf, .wrl) and write "
+    "points": "Find the MPEG-4 feature points on HEAD (.obj, .glb, .gltf, .wrl, .ply, .stl, .off) and write "
               "them.",
     "render": "Render FACE (neutral or posed) to a PNG or JPEG: one view, a turntable or a "
               "cloning grid.",

@@ -81,7 +81,7 @@ def _default_output(head: str, edit: bool) -> str:
 @click.option("--lenient", is_flag=True, help="Read VRML leniently (unknown nodes kept, with a warning).")
 def points_command(head: str, output: Optional[str], edit: bool, given: Optional[str], snap: bool,
                    preview: Optional[str], no_preview: bool, lenient: bool) -> None:
-    """Find the MPEG-4 feature points on HEAD (.obj, .glb, .gltf, .wrl) and write them."""
+    """Find the MPEG-4 feature points on HEAD (.obj, .glb, .gltf, .wrl, .ply, .stl, .off) and write them."""
     if snap and not given:
         raise click.UsageError("--snap moves the points of a file: give it with --points")
     if preview and no_preview:

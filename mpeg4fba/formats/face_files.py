@@ -1,7 +1,8 @@
 """Reading a face from whatever file holds it, with its feature points from a sidecar.
 
 :func:`read_face` takes a VRML face (``.wrl``, ``.wrz``, ``.gz``: meshes, FDP and FAT)
-or a neutral mesh file (``.obj``, ``.glb``, ``.gltf``: meshes only) and, when given a
+or a neutral mesh file (``.obj``, ``.glb``, ``.gltf``, and scans as ``.ply``, ``.stl``,
+``.off``: meshes only) and, when given a
 feature point file (our JSON sidecar, :mod:`~mpeg4fba.formats.fpjson`, or an Xface
 ``.fdp``, :mod:`~mpeg4fba.formats.xface_fdp`), puts those points on it: points tied to
 a vertex take its position in the face frame; the sidecar's FAPU, if any, is used.
@@ -29,7 +30,7 @@ PathLike = Union[str, "os.PathLike[str]"]
 __all__ = ["read_face", "read_points", "VRML_SUFFIXES", "MESH_SUFFIXES"]
 
 VRML_SUFFIXES = (".wrl", ".wrz", ".wrl.gz", ".gz")
-MESH_SUFFIXES = (".obj", ".glb", ".gltf")
+MESH_SUFFIXES = (".obj", ".glb", ".gltf", ".ply", ".stl", ".off")
 
 
 def read_points(path: PathLike, face: FaceModel) -> tuple:

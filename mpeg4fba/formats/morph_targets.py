@@ -14,6 +14,8 @@ Formats, chosen by the file name's ending (case-insensitive):
   groups of one name merge) is a mesh made of the vertices its faces use, in file
   order.  Without them the file is one mesh of all its vertices, named after the
   neutral's file stem (a target's ungrouped mesh is matched to a one-mesh neutral).
+* **PLY, STL, OFF** (``.ply``, ``.stl``, ``.off``; :mod:`~mpeg4fba.formats.scans`,
+  through meshio): one mesh, named after the file stem like an ungrouped OBJ.
 * **glTF 2.0** (``.gltf``, ``.glb``): each primitive is a mesh (named after its glTF
   mesh, ``<mesh>_<k>`` when a mesh has several primitives,
   ``mesh_<i>`` when unnamed), read from its POSITION accessor in the mesh's own
@@ -68,7 +70,8 @@ PathLike = Union[str, os.PathLike]
 
 #: File name endings -> format, longest first.
 FORMATS = {".wrl.gz": "vrml", ".wrz": "vrml", ".wrl": "vrml", ".vrml": "vrml",
-           ".obj": "obj", ".gltf": "gltf", ".glb": "gltf"}
+           ".obj": "obj", ".gltf": "gltf", ".glb": "gltf",
+           ".ply": "scan", ".stl": "scan", ".off": "scan"}
 
 _NAMING = ("name the file like 'open_jaw@1024.obj', 'viseme_PP.obj' or 'expression_joy.obj', "
            "or give a mapping file (file name -> target name)")
@@ -684,6 +687,11 @@ def _shapes(path: PathLike, lenient: bool = False, with_targets: bool = False) -
     kind = _format(path)
     if kind == "obj":
         return _obj_shapes(path)
+    if kind == "scan":
+        from .scans import read_scan
+        shapes = _Shapes(unnamed=True)
+        shapes.meshes[target_stem(path)] = read_scan(path)
+        return shapes
     if kind == "gltf":
         return _gltf_shapes(path, with_targets)
     return _vrml_shapes(path, lenient)

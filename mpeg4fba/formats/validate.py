@@ -179,7 +179,9 @@ def _check_mesh_file(path: str, tolerance: float, strict: bool) -> Report:
         sub = _check_face(face, path, tolerance)
     else:  # the format has no place for them: not the face's fault, but say what went unchecked
         sub = Report(path, [f for f in check_fat(face) if f.code not in ("FBA002", "FBA003")])
-        kind = "an OBJ" if path.lower().endswith(".obj") else "a glTF"
+        low = path.lower()
+        kind = ("an OBJ" if low.endswith(".obj") else "a glTF" if low.endswith((".glb", ".gltf"))
+                else f"a {os.path.splitext(low)[1][1:].upper()}")
         sub.findings.append(Finding("FBA017", f"{kind} file holds no feature points (no FDP): "
                                     "the checks that need them (feature points, FAPU, the "
                                     "numeric FAP check) were skipped", path))

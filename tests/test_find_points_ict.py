@@ -379,6 +379,7 @@ def test_an_open_mouth_is_read_and_said_to_be_open(data, detect, seed, jaw):
     assert found.points["2.2"][1] - found.points["2.3"][1] == pytest.approx(gap, rel=0.25)
     assert any("mouth is open" in n for n in found.notes)
     assert "note: the mouth is open" in describe_found(found, "the head")
+    assert "open mouth" in found.reasons["2.3"]          # the editor shows it on the point
     # a closed mouth says nothing of the kind
     closed = detect.find_feature_points(ict.placed_face(ict.ict_face(data, ict.identity(data, seed)), None))
     assert closed.notes == ()

@@ -153,7 +153,8 @@ class FoundPoints:
         Required ids (:func:`mpeg4fba.fba.requirements.required_points`) the geometry
         does not have (no eyeballs, no tongue...), in the standard's order.
     reasons : dict
-        Id -> why it is missing, or why its confidence is low.
+        Id -> why it is missing, why its confidence is low, or what to know about it (the
+        inner lips' middles of an open mouth).
     up, forward : numpy.ndarray
         Unit vectors of the head frame found, in model coordinates.
     scale : float
@@ -248,6 +249,9 @@ def find_feature_points(face: FaceModel, *, ids: Optional[Iterable[str]] = None)
         eye_pts.update(mouth_pts)
     X = _register(tpl, Vt, ST, {**prof_pts, **eye_pts})
     reasons: dict = {}
+    if notes:                    # (the open mouth's: shown on its points in the editor)
+        for k in ("2.2", "2.3"):
+            reasons[k] = "the lips are apart here: an open mouth (MPEG-4's neutral has them closed)"
     pos: dict = {}       # id -> template-frame position on the target
     tie: dict = {}       # id -> stacked vertex index
     resid: dict = {}

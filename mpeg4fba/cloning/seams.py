@@ -17,9 +17,9 @@ later copies are then in no triangle), so every per-vertex result still has the 
 own rows; the cloner gives each copy its first copy's motion (and holds a feature
 point at a vertex in some triangle: :class:`~mpeg4fba.cloning.skin.Skin`), and the face
 it writes has the triangles it was given.  On an ICT head as triangle soup, the cloner's
-errors are the whole head's (mean 0.046 % of the eye distance, max 4.45).  Coincident vertices that a face's FAT moves differently
-(lips modelled touching, whose tables part them) are distinct points of the surface and
-stay apart.
+errors are the whole head's (mean 0.046 % of the eye distance, max 4.45).  Coincident
+vertices that a face's FAT moves differently (lips modelled touching, whose tables part
+them) are distinct points of the surface and stay apart.
 
 >>> from mpeg4fba.fba.face import FaceMesh, FaceModel
 >>> V = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0.0]])

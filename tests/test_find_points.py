@@ -356,16 +356,16 @@ def test_a_hole_where_the_nose_is_is_said_not_guessed():
 
 
 def test_eyeballs_away_from_the_eyes_found_say_the_face_was_misread():
-    from mpeg4fba.cloning import detect as D
+    from mpeg4fba.cloning import misread
     head = reference_head(resolution=0.5, seed=3)
     # the eyes' lids found a whole eye separation above their eyeballs
     pos = {k: np.array(v, dtype=float) for k, v in
            {"3.5": [0.5, 0, 1], "3.7": [0.7, 1, 1], "3.11": [0.3, 1, 1], "3.1": [0.5, 1.1, 1],
             "3.3": [0.5, 0.9, 1]}.items()}
     with pytest.raises(FaceNotFoundError, match="misread"):
-        D._eyes_round_their_eyeballs(pos)
+        misread.eyes_round_their_eyeballs(pos)
     pos["3.5"] = np.array([0.52, 0.95, 1.0])
-    D._eyes_round_their_eyeballs(pos)                  # round it: fine
+    misread.eyes_round_their_eyeballs(pos)                  # round it: fine
     assert find_feature_points(head).points            # a whole head passes both checks
 
 

@@ -28,7 +28,8 @@ Steps 1-3 are :mod:`~mpeg4fba.cloning.headframe`'s, 4 :mod:`~mpeg4fba.cloning.mi
    the upper lip's front, the lips' meeting (a crease, a slit or an open mouth's parting;
    the crease from which a groove runs the mouth's width), the lower lip's vermilion
    edge, the menton.  A hole in the skin where the nose is is refused
-   (:data:`NOSE_SPAN`): read, it put everything below it wrong.
+   (:data:`~mpeg4fba.cloning.misread.NOSE_SPAN`): read, it put everything below it
+   wrong.
 5. **Eyes** (:func:`~mpeg4fba.cloning.frontview.eye_opening`): each eye's opening seen
    from the front (a depth map of the skin, :func:`~mpeg4fba.cloning.frontview.depth_map`:
    a hole, or the skin's edge round an eyeball that is another piece): corners at its lateral ends (the inner one where the groove beyond it
@@ -49,7 +50,8 @@ Steps 1-3 are :mod:`~mpeg4fba.cloning.headframe`'s, 4 :mod:`~mpeg4fba.cloning.mi
 9. **Parts**: eyeballs (the pupil: the most forward point of a closed round component in
    the eye), teeth and tongue (components where the template's are), when present.
    Eyeballs found elsewhere than the eyes, or lids found away from their eyeball
-   (:data:`EYE_LAYOUT_LIMIT`), mean the face was misread, and say so.
+   (:data:`~mpeg4fba.cloning.misread.EYE_LAYOUT_LIMIT`), mean the face was misread, and
+   say so (:mod:`~mpeg4fba.cloning.misread`).
 
 Units: the work is done in the template's frame (x the face's left, y up, z forward) in
 units of the template's eye separation; results are returned in the face's own units and
@@ -105,7 +107,8 @@ from scipy.spatial import cKDTree
 from ..fba.face import FaceModel
 from ..fba.featurepoints import FeaturePointSet, normalise_id, point_order
 from ..fba.requirements import FAPU_POINTS, PART_POINTS, required_points
-from . import frontview, headframe, midline
+from . import frontview, headframe, midline, misread
+from .frontview import PUPIL_OPENINGS
 from .convention import convention_points, shift_to_convention
 from .template import (MIRROR, Template, boundary_vertices, opening_boxes, opening_landmarks,
                        reference_template)
@@ -232,7 +235,7 @@ def find_feature_points(face: FaceModel, *, ids: Optional[Iterable[str]] = None)
     # the mid-line profile's points (nose, lips), then the template's skin bent onto the
     # target's, held at them
     prof = midline.profile(Vt, ST, 0.6, -2.5)
-    _no_hole_on_the_nose(prof)
+    misread.no_hole_on_the_nose(prof)
     prof_pts = midline.profile_points(prof, 0.0, lambda p: bool(frontview.mouth_points(Vt, ST, p)))
     eye_pts = frontview.eye_points(Vt, ST, tpl)
     notes = []
@@ -302,7 +305,7 @@ def find_feature_points(face: FaceModel, *, ids: Optional[Iterable[str]] = None)
         pos[k] = p + (X[nn] - tpl.V[nn]).mean(0)
         resid[k] = float(near_d[nn].mean())
     _parts(pieces, s, R, t, X, tpl, pos, tie, reasons)
-    _eyes_round_their_eyeballs(pos)
+    misread.eyes_round_their_eyeballs(pos)
     opening_pupils = _pupils_in_openings(pos, resid, reasons)
     # results in model coordinates
     inv = lambda p: (np.asarray(p) - t) @ R / s
@@ -439,9 +442,7 @@ def _parts(pieces: headframe.Pieces, s, R, t, X, tpl: Template, pos, tie, reason
             if len(elsewhere) >= 2:
                 raise FaceNotFoundError(
                     f"the face was misread: it has eyeballs (closed round pieces), none where "
-                    f"its eye {fp} was placed, so the nose, mouth and eyes were placed wrong (holes "
-                    "in the skin where the nose or eyes are can do this); give the points "
-                    "(mpeg4fba points HEAD --edit)")
+                    f"its eye {fp} was placed, {misread.MISREAD}")
             reasons[fp] = "no eyeball: no closed round piece in the eye" if not cand else \
                 "no eyeball: the pieces in the eye are not round"
             continue
@@ -528,68 +529,6 @@ def _teeth_row(centre: np.ndarray, upper: np.ndarray, lower: np.ndarray,
     if not len(u) or not len(lo):
         return None
     return "UpperTeeth" if centre[1] > 0.5 * (u.min() + lo.max()) else "LowerTeeth"
-
-
-#: Each pupil's eye opening: its corners and lid middles.
-PUPIL_OPENINGS = {"3.5": frontview.EYE_KEYS["left eye"], "3.6": frontview.EYE_KEYS["right eye"]}
-
-
-#: The stretch of the mid line (template frame, eye separations below the eye line) whose
-#: front must be the face's all along: the nose, from below its root to above the upper
-#: lip.  A scan's hole there (a shiny nose tip) shows the mid-plane cut the back of the
-#: head or nothing; the profile then has no nose, and the rest of the face was read off
-#: the wrong bumps (the reference head with its tip cut out: mouth corners 40 % of the eye
-#: distance off, 2.1 80 %, at confidences up to 0.8).
-NOSE_SPAN = (-0.9, -0.1)
-#: The longest gap (eye separations) allowed there: 0.03 (a coarse mesh's sliver can
-#: leave a bin or two uncut); a bin is a gap when nothing is cut there or its front lies
-#: more than 0.8 ES behind the span's most forward (a nose stands out 0.15-0.55 ES).
-NOSE_GAP = 0.03
-
-
-def _no_hole_on_the_nose(prof: midline.Profile) -> None:
-    """FaceNotFoundError when the mid-plane profile has a gap longer than
-    :data:`NOSE_GAP` within :data:`NOSE_SPAN`: a hole in the skin on the nose."""
-    sel = (prof.y >= NOSE_SPAN[0]) & (prof.y <= NOSE_SPAN[1])
-    raw = prof.raw[sel]
-    if not np.isfinite(raw).any():
-        return
-    with np.errstate(invalid="ignore"):
-        gap = ~(raw >= np.nanmax(raw) - 0.8)
-    if not gap.any():
-        return
-    # the longest run of uncut bins
-    edges = np.flatnonzero(np.diff(np.r_[0, gap.astype(int), 0]))
-    runs = edges[1::2] - edges[::2]
-    longest = float(runs.max() * midline.PROFILE_STEP)
-    if longest > NOSE_GAP:
-        raise FaceNotFoundError(
-            f"the skin has a hole on its mid line where the nose is ({longest:.2f} eye "
-            "separations of it not there): the nose, and from it the mouth and chin, can't "
-            "be read; close the hole in the mesh, or give the points (mpeg4fba points HEAD "
-            "--edit)")
-
-
-#: How far (eye separations, seen from the front) the middle of an eye's lid points may
-#: lie from the pupil of an eyeball under it: 0.3.  On ICT heads they are within 0.05; a
-#: head whose frame was misread (holes where the nose is, taken for eye openings, put
-#: the eyes on the forehead: 0.4 ES and more off) has every point off, and says so.
-EYE_LAYOUT_LIMIT = 0.3
-
-
-def _eyes_round_their_eyeballs(pos) -> None:
-    """FaceNotFoundError when an eye's points found on the skin do not lie round the
-    pupil of the eyeball under them (:data:`EYE_LAYOUT_LIMIT`): the rest was misread."""
-    for fp, eye in PUPIL_OPENINGS.items():
-        if fp not in pos or not all(k in pos for k in eye):
-            continue
-        d = float(np.linalg.norm(np.mean([pos[k] for k in eye], axis=0)[:2] - pos[fp][:2]))
-        if d > EYE_LAYOUT_LIMIT:
-            raise FaceNotFoundError(
-                f"the face was misread: the lids found round eye {fp} lie {d:.2f} eye "
-                f"separations from its eyeball's pupil (at most {EYE_LAYOUT_LIMIT}), so the "
-                "nose, mouth and eyes were placed wrong (holes in the skin where the nose or "
-                "eyes are can do this); give the points (mpeg4fba points HEAD --edit)")
 
 
 def _pupils_in_openings(pos, resid, reasons) -> tuple:

@@ -16,7 +16,8 @@ from typing import Optional
 import numpy as np
 
 __all__ = ["depth_map", "front_at", "groove", "mouth", "mouth_points", "eye_points",
-           "eye_opening", "DEPTH_CELL", "INNER_CORNER", "EYE_KEYS", "INNER_CANTHAL_RATIO",
+           "eye_opening", "DEPTH_CELL", "INNER_CORNER", "EYE_KEYS", "PUPIL_OPENINGS",
+           "INNER_CANTHAL_RATIO",
            "INNER_CANTHAL_LIMIT"]
 
 
@@ -249,6 +250,8 @@ def mouth(Vt: np.ndarray, T: np.ndarray, stomion: np.ndarray, gap: float = 0.0) 
 
 #: Each eye's lid-margin points: outer corner, inner corner, upper and lower lid middles.
 EYE_KEYS = {"left eye": ("3.7", "3.11", "3.1", "3.3"), "right eye": ("3.12", "3.8", "3.2", "3.4")}
+#: Each pupil's eye opening: its corners and lid middles.
+PUPIL_OPENINGS = {"3.5": EYE_KEYS["left eye"], "3.6": EYE_KEYS["right eye"]}
 
 
 #: The inner canthi's distance over the outer canthi's (3.11-3.8 over 3.7-3.12): 0.412 on

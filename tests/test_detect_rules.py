@@ -185,6 +185,42 @@ def test_a_lower_lip_behind_the_chins_rise_is_still_the_lower_lip():
     assert -1.22 < pts["8.2"][1] < -1.1
 
 
+def test_a_shelf_under_the_chin_does_not_take_the_menton_down_the_throat():
+    # the chin's underside falls 0.3 ES, stands on a shelf, then falls to the throat:
+    # 2.1 is the chin's own 45-degree turn, not the top of the second fall (walking up
+    # from under the chin stopped at the shelf: a fresh ICT draw, seed 7777, had 2.1
+    # 55 % of the eye distance down the throat)
+    shelf = lambda Y: 0.7 / (1 + np.exp((Y + 1.70) / 0.02)) - 0.7 / (1 + np.exp((Y + 1.95) / 0.02))
+    V, T = _face(extra=shelf)
+    pts = M.profile_points(M.profile(V, T, 0.6, -2.4), 0.0)
+    assert -1.72 < pts["2.1"][1] < -1.6
+
+
+def test_menton_keeps_to_the_chin_above_the_hollow_where_the_throat_meets_it():
+    # the chin falls 0.3 ES to a throat standing straight down: the hollow where they
+    # meet turns through 45 degrees too, lower down (a jaw opened wide, ICT jawOpen 1.0,
+    # had 2.1 put there, 30 % of the eye distance behind the chin)
+    def shallow(Y):
+        return 1.0 / (1 + np.exp((Y + 1.70) / 0.03)) - 0.3 / (1 + np.exp((Y + 1.70) / 0.015))
+    V, T = _face(extra=shallow)
+    pts = M.profile_points(M.profile(V, T, 0.6, -2.4), 0.0)
+    assert "2.1" not in pts                             # no fall deep enough to be a chin's
+    m = M.menton(V, T, pts)
+    assert -1.70 < m[1] < -1.6                          # above the fall's steepest, -1.70
+
+
+def test_a_lower_lip_with_no_fold_below_it_keeps_its_rim_off_the_chins_edge():
+    # no labiomental fold: below the lower lip the profile falls all the way to the
+    # chin's edge, 0.3 ES down, where it drops away (a jaw opened wide takes the chin
+    # back under the lip); the edge bends more sharply than the lip's rim but is not it
+    def no_fold(Y):
+        return (-_bump(Y, -1.5, 0.06, 0.12) - 0.1 * np.clip(-1.15 - Y, 0, None)
+                + 1.0 / (1 + np.exp((Y + 1.70) / 0.03)) - 1.0 / (1 + np.exp((Y + 1.45) / 0.02)))
+    V, T = _face(extra=no_fold)
+    pts = M.profile_points(M.profile(V, T, 0.6, -2.4), 0.0)
+    assert -1.25 < pts["8.2"][1] < pts["2.3"][1]
+
+
 def test_mid_plane_found_for_a_turned_shifted_symmetric_face():
     V, T = _face(resolution=0.02)
     turn = H.rotation(np.array([0.0, 1.0, 0.0]), np.radians(4.0))

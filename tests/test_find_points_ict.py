@@ -383,3 +383,24 @@ def test_an_open_mouth_is_read_and_said_to_be_open(data, detect, seed, jaw):
     # a closed mouth says nothing of the kind
     closed = detect.find_feature_points(ict.placed_face(ict.ict_face(data, ict.identity(data, seed)), None))
     assert closed.notes == ()
+
+
+#: Chins read down the throat before their rule took the first 45-degree turn below the
+#: chin's front (and the lower lip's rim the one above its underside's steepest fall):
+#: jaws opened as wide as ICT's jawOpen goes (2.1 50-62 %, 8.2 44 % of the eye distance
+#: off), and a closed mouth over a chin whose underside stands on a shelf (fresh draw
+#: 7777's person 671399744: 2.1 55 % off).
+CHINS = [(318855079, 1.0), (1829395269, 1.0), (671399744, 0.0)]
+
+
+@pytest.mark.parametrize("seed,jaw", CHINS, ids=[f"{s}-jaw{j}" for s, j in CHINS])
+def test_the_chin_is_read_on_the_chin(data, detect, seed, jaw):
+    V = ict.identity(data, seed) + jaw * data.expressions["jawOpen"]
+    face = ict.ict_face(data, V)
+    es = float(np.linalg.norm(face.points["3.5"] - face.points["3.6"]))
+    lm = ict.landmark_points(data, V)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        found = detect.find_feature_points(ict.placed_face(face, None))
+    err = {k: float(np.linalg.norm(found.points[k] - lm[k]) / es * 100) for k in ("2.1", "8.2")}
+    assert err["2.1"] < 8 and err["8.2"] < 8, err

@@ -27,9 +27,10 @@ __all__ = ["Profile", "profile", "profile_points", "plane_cut", "menton", "PROFI
 def menton(V: np.ndarray, T: np.ndarray, pts: dict) -> np.ndarray:
     """2.1 by the menton rule on a skin in the head frame (x left, y up, z forward, eye
     separations): on the mid-plane profile below the lower lip (8.2 in ``pts``), the
-    lowest point whose normal points within about 20 degrees of 45 degrees between
-    forward and down, of those no more than 0.6 behind the chin's most forward point (so
-    the chin, not the lower lip's underside above it nor the throat behind it)."""
+    lowest point of the first run down the chin of points whose normal points within
+    about 20 degrees of 45 degrees between forward and down, and no more than 0.6
+    behind the chin's most forward point (so the chin, not the lower lip's underside
+    above it nor the throat behind it)."""
     N = vertex_normals(V, T)
     lip = pts["8.2"]
     band = np.flatnonzero((np.abs(V[:, 0] - lip[0]) < 0.05) & (V[:, 1] < lip[1] - 0.2)
@@ -38,10 +39,19 @@ def menton(V: np.ndarray, T: np.ndarray, pts: dict) -> np.ndarray:
         return pts.get("2.1", lip)
     front = V[band, 2].max()
     want = np.array([0.0, -np.sqrt(0.5), np.sqrt(0.5)])
-    good = band[(N[band] @ want > 0.93) & (V[band, 2] > front - 0.6)]
-    if not len(good):
+    good = (N[band] @ want > 0.93) & (V[band, 2] > front - 0.6)
+    if not good.any():
         return pts.get("2.1", lip)
-    return V[good[np.argmin(V[good, 1])]]
+    # the lowest of the first run of such points down the chin: where the throat meets
+    # the chin in a hollow its surface turns through 45 degrees too, and under a jaw
+    # opened wide that hollow stands high enough to count (2.1 went 30 % of the eye
+    # distance behind the chin)
+    order = np.argsort(-V[band, 1], kind="stable")
+    g = good[order]
+    i0 = int(np.argmax(g))
+    after = np.flatnonzero(~g[i0:])
+    i1 = i0 + (int(after[0]) if len(after) else len(g) - i0)
+    return V[band[order[i1 - 1]]]
 
 
 #: Step (eye separations) of the mid-plane profile's height grid: 0.01 ES (about 0.6 mm),
@@ -304,21 +314,36 @@ def profile_points(prof: Profile, eye_y: float, lips_ok=None) -> dict:
     ll = lo + (int(bumps[0]) if len(bumps) else int(np.argmax(below)))
     end = min(ll + int(0.35 / PROFILE_STEP), len(zz) - 1)
     fold = ll + int(np.argmin(zz[ll:end + 1]))
+    if fold == end:
+        # still falling at the window's end: no fold within reach.  A jaw opened wide
+        # takes the chin back under the lower lip, and the chin's edge, more convex than
+        # the lip's rim, is then within the window (ICT jawOpen 1.0: 8.2 on it, 35-45 %
+        # of the eye distance low).  The rim is then sought above the lip's underside's
+        # steepest fall (its first, of 0.002 ES a step or more above what flanks it):
+        # the rim bends over into it, and a chin's edge comes after
+        fall = zz[ll:end] - zz[ll + 1:end + 1]
+        steepest, _ = find_peaks(np.nan_to_num(fall), prominence=0.002)
+        if len(steepest):
+            fold = ll + int(steepest[0]) + 1
     if fold > ll + 2:
         i8 = ll + int(np.argmin(d2[ll:fold]))
         out["8.2"] = np.array([0.0, yy[i8], zz[i8]])
-    # 2.1 (menton; the module docstring's convention): from under the chin (where the
-    # profile has fallen 0.4 ES behind the chin's front, 0.25 ES or more below the lips'
-    # meeting) back up the chin's underside to where it turns 45 degrees from facing down
-    # to facing forward (the lower lip's underside can be as steep, so not walking down)
+    # 2.1 (menton; the module docstring's convention): under the chin (where the profile
+    # has fallen 0.4 ES behind the chin's front, 0.25 ES or more below the lips' meeting:
+    # the lower lip's underside can be as steep, so the chin is known by its fall), the
+    # chin's underside's first turn 45 degrees from facing forward to facing down below
+    # the chin's front (not the last above that fall: a throat can stand in a shelf
+    # between, as under a jaw opened wide, which put 2.1 on the throat)
     a0 = lo + int(0.25 / PROFILE_STEP)
     if a0 < len(zz) - 2:
         front = np.maximum.accumulate(zz[a0:])
         under = np.flatnonzero(zz[a0:] < front - 0.4)
         if len(under):
-            m = a0 + int(under[0])
-            while m - 1 > a0 and (zz[m - 2] - zz[m]) / (2 * PROFILE_STEP) >= 1.0:
-                m -= 1
+            u = a0 + int(under[0])
+            c = a0 + int(np.argmax(zz[a0:u + 1]))
+            j = np.arange(max(c, a0 + 1) + 1, u + 1)
+            steep = (zz[j - 2] - zz[j]) / (2 * PROFILE_STEP) >= 1.0
+            m = int(j[np.argmax(steep)]) - 1 if steep.any() else u
             out["2.1"] = np.array([0.0, yy[m], zz[m]])
     # subnasale: furthest behind the chord tip -> upper lip
     a, b = np.array([yy[tip], zz[tip]]), np.array([yy[ul], zz[ul]])

@@ -196,6 +196,21 @@ def test_a_shelf_under_the_chin_does_not_take_the_menton_down_the_throat():
     assert -1.72 < pts["2.1"][1] < -1.6
 
 
+def test_a_chin_with_no_front_of_its_own_turns_below_the_lower_lips_underside():
+    # no chin bump: the lower lip's underside falls steeply past 0.25 ES below the lips'
+    # meeting, then the chin slopes gently back to its turn under the chin; the chin's
+    # front is where the lip's fall ends, and 2.1 the turn below it, not the lip's fall
+    def retreating(Y):
+        return (-_bump(Y, -1.5, 0.06, 0.12) - 0.08 / (1 + np.exp((Y + 1.31) / 0.012))
+                - 0.3 * np.clip(-1.34 - Y, 0, 0.36))
+    V, T = _face(extra=retreating)
+    pts = M.profile_points(M.profile(V, T, 0.6, -2.4), 0.0)
+    y = np.arange(-1.9, -1.4, 1e-4)[::-1]
+    z = _face_profile(y) + retreating(y)
+    turn = y[np.flatnonzero(np.gradient(z, y) >= 1.0)[0]]     # the first 45 degrees down
+    assert pts["2.1"][1] == pytest.approx(turn, abs=0.03)
+
+
 def test_menton_keeps_to_the_chin_above_the_hollow_where_the_throat_meets_it():
     # the chin falls 0.3 ES to a throat standing straight down: the hollow where they
     # meet turns through 45 degrees too, lower down (a jaw opened wide, ICT jawOpen 1.0,

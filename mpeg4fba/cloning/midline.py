@@ -332,18 +332,23 @@ def profile_points(prof: Profile, eye_y: float, lips_ok=None) -> dict:
     # has fallen 0.4 ES behind the chin's front, 0.25 ES or more below the lips' meeting:
     # the lower lip's underside can be as steep, so the chin is known by its fall), the
     # chin's underside's first turn 45 degrees from facing forward to facing down below
-    # the chin's front (not the last above that fall: a throat can stand in a shelf
-    # between, as under a jaw opened wide, which put 2.1 on the throat)
+    # the chin's front (not the last above that fall: a throat can stand on a shelf
+    # between, and did, 55 % of the eye distance below a fresh ICT head's chin, and
+    # under a jaw opened wide).  The chin's front is the most forward point after any
+    # stretch of the lower lip's underside still falling at 45 degrees or more.
     a0 = lo + int(0.25 / PROFILE_STEP)
     if a0 < len(zz) - 2:
         front = np.maximum.accumulate(zz[a0:])
         under = np.flatnonzero(zz[a0:] < front - 0.4)
         if len(under):
             u = a0 + int(under[0])
-            c = a0 + int(np.argmax(zz[a0:u + 1]))
-            j = np.arange(max(c, a0 + 1) + 1, u + 1)
-            steep = (zz[j - 2] - zz[j]) / (2 * PROFILE_STEP) >= 1.0
-            m = int(j[np.argmax(steep)]) - 1 if steep.any() else u
+            i = np.arange(a0, u + 1)
+            steep = (zz[i - 1] - zz[np.minimum(i + 1, len(zz) - 1)]) / (2 * PROFILE_STEP) >= 1.0
+            k = a0 + (int(np.argmax(~steep)) if (~steep).any() else u - a0)
+            c = k + int(np.argmax(zz[k:u + 1]))
+            j = np.arange(c + 1, u + 1)
+            turn = (zz[j - 2] - zz[j]) / (2 * PROFILE_STEP) >= 1.0
+            m = int(j[np.argmax(turn)]) - 1 if turn.any() else u
             out["2.1"] = np.array([0.0, yy[m], zz[m]])
     # subnasale: furthest behind the chord tip -> upper lip
     a, b = np.array([yy[tip], zz[tip]]), np.array([yy[ul], zz[ul]])

@@ -14,13 +14,13 @@ load numpy, lark and the node catalogue.
 from __future__ import annotations
 
 from .._lazy import lazy_names
-from .errors import VRMLError
+from .errors import VRMLError, VRMLWarning
 from .inflate import inflate_limits
 
 _LAZY = {name: (f"{__name__}.{module}", name) for module, names in (
     ("catalogue", ("NODE_TYPES", "VRML97_NODES", "FieldDecl", "NodeType")),
     ("fields", ("FIELD_TYPES", "FieldType", "Image")),
-    ("reader", ("VRMLWarning", "load", "loads")),
+    ("reader", ("load", "loads")),
     ("scene", ("ExternProto", "Node", "Proto", "RawValue", "Route", "Scene")),
     ("writer", ("dump", "dumps"))) for name in names}
 

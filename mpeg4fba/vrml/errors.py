@@ -43,6 +43,10 @@ class LocatedError(ValueError):
         return (type(self), (self.message, self.path, self.line, self.column))
 
 
+class VRMLWarning(UserWarning):
+    """Something the lenient reader kept although it is not VRML97."""
+
+
 class VRMLError(LocatedError):
     """A syntax or meaning error in VRML text, or a value that can't be written.
 

@@ -33,7 +33,7 @@ import numpy as np
 
 from .catalogue import NodeType
 from .errors import VRMLError
-from .reader import VRMLWarning
+from .errors import VRMLWarning
 from .scene import Node, Scene
 
 __all__ = ["transform_matrix", "rotation_matrix", "NodePath", "iter_paths", "world_matrix",

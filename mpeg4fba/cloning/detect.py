@@ -62,8 +62,10 @@ centimetres, 1 in millimetres.
 Chin convention: 2.1 ("bottom of the chin") is the *menton*, the lowest point of the chin
 on the mid line as seen from the front (the lowest point of the jaw line of a face photo,
 Multi-PIE landmark 8), where the chin's profile turns from facing forward to facing down:
-on the mid-plane profile, walking back up from under the chin, the first point where the
-profile is no steeper than 45 degrees (:func:`~mpeg4fba.cloning.midline.profile_points`;
+on the mid-plane profile, below the chin's front, the first point where the profile falls
+45 degrees (:func:`~mpeg4fba.cloning.midline.profile_points`; the chin known by its fall
+of 0.4 eye separations below, its front taken after any stretch of the lower lip's
+underside still falling as steeply;
 :func:`~mpeg4fba.cloning.midline.menton`, the
 same by the surface normals, when the profile has no chin).  The reference head's own 2.1
 lies further back, under the jaw; the landmark convention is what users (and ICT-FaceKit)

@@ -355,6 +355,34 @@ def test_a_hole_where_the_nose_is_is_said_not_guessed():
     assert worst < 0.08 * es
 
 
+def test_closed_eyes_are_said_and_their_lid_points_flagged():
+    # the skin's eye holes capped (lids shut, as scans are often taken): no opening is
+    # seen, so the lid points are the fitted template's open lids, said in a note and on
+    # each point, with a low confidence (a closed ICT eye's upper lid was placed 10 % of
+    # the eye distance high at confidence 0.7)
+    from mpeg4fba.cli.points import describe_found
+    from mpeg4fba.cloning.surface import boundary_loops
+    head = reference_head(resolution=0.5, seed=3)
+    m = head.meshes["Skin"]
+    V, T = m.vertices, m.triangles
+    caps = []
+    for loop in boundary_loops(T):
+        if abs(abs(V[loop].mean(0)[0]) - abs(head.points["3.5"][0])) < 0.1 * abs(head.points["3.5"][0]):
+            c = len(V) + len(caps)
+            caps.append(V[loop].mean(0))
+            T = np.r_[T, np.c_[np.roll(loop, -1), loop, np.full(len(loop), c)]]
+    assert len(caps) == 2
+    shut = head.copy()
+    shut.meshes["Skin"] = FaceMesh("Skin", np.r_[V, caps], T, m.parent)
+    shut.points, shut.fat, shut.colors = FeaturePointSet(), FAT(), {}
+    found = find_feature_points(shut)
+    assert any("no eye opening seen at the left eye and the right eye" in n for n in found.notes)
+    lids = ("3.1", "3.2", "3.3", "3.4", "3.7", "3.8", "3.11", "3.12")
+    assert all(found.confidence[k] <= 0.2 and "no eye opening" in found.reasons[k] for k in lids)
+    assert "note: no eye opening seen" in describe_found(found, "the head")
+    assert find_feature_points(head).notes == ()            # the open eyes: nothing said
+
+
 def test_eyeballs_away_from_the_eyes_found_say_the_face_was_misread():
     from mpeg4fba.cloning import misread
     head = reference_head(resolution=0.5, seed=3)

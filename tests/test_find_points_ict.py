@@ -404,3 +404,16 @@ def test_the_chin_is_read_on_the_chin(data, detect, seed, jaw):
         found = detect.find_feature_points(ict.placed_face(face, None))
     err = {k: float(np.linalg.norm(found.points[k] - lm[k]) / es * 100) for k in ("2.1", "8.2")}
     assert err["2.1"] < 8 and err["8.2"] < 8, err
+
+
+def test_closed_eyes_are_said(data, detect):
+    # ICT's eyeBlink at full weight on both eyes: no opening is seen, and the lid points
+    # (the fitted template's open lids, the upper ones 10 % of the eye distance high) are
+    # flagged rather than given at the confidence of points read off the geometry
+    seed = 612987514
+    V = ict.identity(data, seed) + data.expressions["eyeBlink_L"] + data.expressions["eyeBlink_R"]
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        found = detect.find_feature_points(ict.placed_face(ict.ict_face(data, V), None))
+    assert any("no eye opening seen" in n for n in found.notes)
+    assert max(found.confidence[k] for k in ("3.1", "3.2", "3.3", "3.4")) <= 0.2

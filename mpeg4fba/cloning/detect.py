@@ -33,7 +33,10 @@ Steps 1-3 are :mod:`~mpeg4fba.cloning.headframe`'s, 4 :mod:`~mpeg4fba.cloning.mi
 5. **Eyes** (:func:`~mpeg4fba.cloning.frontview.eye_opening`): each eye's opening seen
    from the front (a depth map of the skin, :func:`~mpeg4fba.cloning.frontview.depth_map`:
    a hole, or the skin's edge round an eyeball that is another piece): corners at its lateral ends (the inner one where the groove beyond it
-   ends), lid middles at its top and bottom, on the lid margin's front edge.
+   ends), lid middles at its top and bottom, on the lid margin's front edge.  An eye
+   with no opening seen (closed lids, as scans are often taken, or an eyeball joined to
+   them) keeps the fitted template's lids, said in a note and on each point, at a
+   confidence of at most :data:`GUESSED_CONFIDENCE`.
 6. **Mouth** (:func:`~mpeg4fba.cloning.frontview.mouth_points`): the lips' contact
    groove seen from the front, followed from the stomion: commissures at its ends, inner corners and inner-lip
    midpoints along it.
@@ -134,6 +137,11 @@ CRISP_POINTS = ("2.1", "2.2", "2.3", "2.4", "2.5", "3.1", "3.2", "3.3", "3.4", "
                 "3.11", "3.12", "8.1", "8.2", "8.3", "8.4", "9.3")
 
 
+#: The confidence, at most, of a point the geometry should mark and does not (an eye's
+#: lid points with no eye opening seen): 0.2, among the points a review looks at first.
+GUESSED_CONFIDENCE = 0.2
+
+
 #: The template's eye separation in millimetres (the reference head's ES0): what
 #: ``FoundPoints.scale`` takes the target's to be.
 TEMPLATE_ES_MM = 64.0
@@ -175,8 +183,8 @@ class FoundPoints:
         the left, when the geometry has a contact groove
         (:func:`~mpeg4fba.cloning.snapping.snap_points`).
     notes : tuple
-        What the user should know about the head as found (an open mouth: MPEG-4's
-        neutral face has its lips closed).
+        What the user should know about the head as found (an open mouth, an eye with no
+        opening seen: MPEG-4's neutral face has its lips closed and its eyes open).
     """
 
     points: FeaturePointSet
@@ -241,7 +249,17 @@ def find_feature_points(face: FaceModel, *, ids: Optional[Iterable[str]] = None)
     prof_pts = midline.profile_points(prof, 0.0, lambda p: bool(frontview.mouth_points(Vt, ST, p)))
     eye_pts = frontview.eye_points(Vt, ST, tpl)
     notes = []
-    if "2.2" in prof_pts and prof_pts["2.2"][1] - prof_pts["2.3"][1] > midline.SLIT_LIMIT:
+    # an eye with no opening seen from the front: closed lids (scans are often taken with
+    # the eyes shut) or an eyeball joined to them; its lid points are then the fitted
+    # template's open lids (a closed ICT eye's upper lid 10 % of the eye distance high)
+    unseen = [eye for eye, keys in frontview.EYE_KEYS.items() if keys[2] not in eye_pts]
+    if unseen:
+        notes.append(f"no eye opening seen at the {' and the '.join(unseen)} (closed lids, "
+                     "or an eyeball joined to them): the lid points there are the fitted "
+                     "template's open lids, not read off the geometry; MPEG-4's neutral face "
+                     "has its eyes open, and eyelid FAPs move the lids from where they are")
+    open_mouth = "2.2" in prof_pts and prof_pts["2.2"][1] - prof_pts["2.3"][1] > midline.SLIT_LIMIT
+    if open_mouth:
         gap = float(prof_pts["2.2"][1] - prof_pts["2.3"][1])
         notes.append(f"the mouth is open (lips {gap:.2f} eye separations, about "
                      f"{gap * TEMPLATE_ES_MM:.0f} mm, apart): MPEG-4's neutral face has the "
@@ -254,9 +272,12 @@ def find_feature_points(face: FaceModel, *, ids: Optional[Iterable[str]] = None)
         eye_pts.update(mouth_pts)
     X = _register(tpl, Vt, ST, {**prof_pts, **eye_pts})
     reasons: dict = {}
-    if notes:                    # (the open mouth's: shown on its points in the editor)
+    if open_mouth:               # (shown on its points in the editor)
         for k in ("2.2", "2.3"):
             reasons[k] = "the lips are apart here: an open mouth (MPEG-4's neutral has them closed)"
+    guessed = [k for eye in unseen for k in frontview.EYE_KEYS[eye]]
+    for k in guessed:
+        reasons[k] = "no eye opening seen here: where the fitted template puts its open lids"
     pos: dict = {}       # id -> template-frame position on the target
     tie: dict = {}       # id -> stacked vertex index
     resid: dict = {}
@@ -312,6 +333,7 @@ def find_feature_points(face: FaceModel, *, ids: Optional[Iterable[str]] = None)
     # results in model coordinates
     inv = lambda p: (np.asarray(p) - t) @ R / s
     conf = _confidence(pos, resid, crisp_ok, reasons)
+    conf.update({k: min(conf[k], GUESSED_CONFIDENCE) for k in guessed if k in conf})
     present = sorted({PART_OF[k] for k in pos if k in PART_OF})
     need = set(required_points(range(3, 69), parts=present, fapu=True, base=REQUIRED_POINTS))
     for kind in ("eye", "teeth", "tongue"):

@@ -16,6 +16,8 @@ its eyeballs and its own random placement (:func:`benchmarks.ict.random_placemen
   lips 0.1 to 0.6 eye separations apart (MPEG-4's neutral face has its lips closed, but
   sculpted and scanned heads often have the mouth a little open);
 - ``smile 0.5``: ``mouthSmile_L`` and ``_R`` at 0.5 (a face modelled smiling);
+- ``eyes shut``: ``eyeBlink_L`` and ``_R`` at 1 (scans are often taken with the eyes
+  shut; the detector should say it sees no eye opening);
 - ``quadric 0.3``: the Skin decimated to 30 % of its vertices by quadric edge collapse
   (``fast-simplification``, as Blender's or MeshLab's decimators do; no vertex is an
   original one);
@@ -31,10 +33,11 @@ its eyeballs and its own random placement (:func:`benchmarks.ict.random_placemen
   with its reason rather than read.
 
 Truth: the points ICT's 68 landmarks define (:data:`benchmarks.ict.LANDMARK_POINTS`) on
-the head's own surface (posed for the jaw and smile heads, the identity's for the
-others), in % of the identity's eye distance ES0, measured in the head frame (the
-placement undone).  Cloning (unless ``--no-clone``; the heads that keep ICT's vertices:
-closed, jaw, smile, noise): the eight expressions of :mod:`benchmarks.bench_clone_ict`
+the head's own surface (posed for the jaw, smile and shut-eye heads, the identity's for
+the others), in % of the identity's eye distance ES0, measured in the head frame (the
+placement undone); "said": the heads whose found points carry a note for the user (an
+open mouth, an eye with no opening seen).  Cloning (unless ``--no-clone``; the heads
+that keep ICT's vertices: closed, jaw, smile, eyes shut, noise): the eight expressions of :mod:`benchmarks.bench_clone_ict`
 from identity :data:`benchmarks.bench_find_points.SOURCE_SEED` onto the head with its
 found points put in the source's convention (as ``mpeg4fba clone`` does) and with the
 landmark points (:func:`benchmarks.ict.landmark_truth`), the ratio of the two.
@@ -69,9 +72,11 @@ VARIANT_SEEDS = tuple(B.fresh_seeds(8080, 6))
 #: ICT expressions added to the neutral, by variant name.
 POSES = {"jaw 0.15": {"jawOpen": 0.15}, "jaw 0.3": {"jawOpen": 0.3},
          "jaw 0.6": {"jawOpen": 0.6}, "jaw 1.0": {"jawOpen": 1.0},
-         "smile 0.5": {"mouthSmile_L": 0.5, "mouthSmile_R": 0.5}}
-VARIANTS = ("closed", *POSES, "quadric 0.3", "noise 0.2 mm", "dense x4", "seams", "holes",
-            "nose hole")
+         "smile 0.5": {"mouthSmile_L": 0.5, "mouthSmile_R": 0.5},
+         "eyes shut": {"eyeBlink_L": 1.0, "eyeBlink_R": 1.0}}
+#: (the later additions last: each head's placement is the next draw of its person's rng)
+VARIANTS = ("closed", "jaw 0.15", "jaw 0.3", "jaw 0.6", "jaw 1.0", "smile 0.5", "quadric 0.3",
+            "noise 0.2 mm", "dense x4", "seams", "holes", "nose hole", "eyes shut")
 #: The variants whose heads keep ICT's vertices, so the cloning has its truth.
 CLONED = ("closed", *POSES, "noise 0.2 mm")
 #: Scan noise, cm per axis (ICT is in cm at life size).
@@ -158,6 +163,7 @@ def run_head(det, data, source, src_found, ident, variant: str, pl, clone: bool)
         res["raised"] = f"{type(e).__name__}: {e}"
         return res
     res["time"] = time.perf_counter() - t0
+    res["notes"] = list(found.notes)
     P = found.points
     res["errors"] = {k: float(np.linalg.norm(pl.undo(P[k]) - truth[k]) / ident.es * 100)
                      for k in B.LANDMARK_IDS if k in P}
@@ -176,9 +182,9 @@ def run_head(det, data, source, src_found, ident, variant: str, pl, clone: bool)
 
 def report(rows: list) -> dict:
     print("\n### Found points against the landmark points, by kind of head (% of ES0)\n")
-    print("| head | heads | raised | median | p95 | max | worst point | without the contour: p95 / max "
-          "| time median (s) |")
-    print("|---|---:|---:|---:|---:|---:|---|---:|---:|")
+    print("| head | heads | raised | said | median | p95 | max | worst point | without the contour: "
+          "p95 / max | time median (s) |")
+    print("|---|---:|---:|---:|---:|---:|---:|---|---:|---:|")
     out = {}
     contour = set(ict.LANDMARK_CONTOUR)
     for v in VARIANTS:
@@ -189,9 +195,10 @@ def report(rows: list) -> dict:
         s, snc = B.stats(e), B.stats(e_nc)
         worst = max(((d, k) for x in ok for k, d in x["errors"].items()), default=(float("nan"), "-"))
         t = B.stats([x["time"] for x in ok])
-        print(f"| {v} | {len(r)} | {len(r) - len(ok)} | {B.fmt(s[0])} | {B.fmt(s[1])} | {B.fmt(s[2])} "
+        said = sum(bool(x.get("notes")) for x in ok)
+        print(f"| {v} | {len(r)} | {len(r) - len(ok)} | {said} | {B.fmt(s[0])} | {B.fmt(s[1])} | {B.fmt(s[2])} "
               f"| {worst[1]} | {B.fmt(snc[1])} / {B.fmt(snc[2])} | {B.fmt(t[0])} |")
-        out[v] = {"heads": len(r), "raised": len(r) - len(ok), "points": s, "no_contour": snc,
+        out[v] = {"heads": len(r), "raised": len(r) - len(ok), "said": said, "points": s, "no_contour": snc,
                   "worst_point": worst[1], "time": t[0]}
     cl = [x for x in rows if "auto" in x and "landmark" in x]
     if cl:

@@ -17,7 +17,7 @@ from mpeg4fba.fba.face import FaceMesh, FaceModel, FaceTransform  # noqa: E402
 from mpeg4fba.fba.fat import (FAT, FaceDefMesh, FaceDefTable, FaceDefTransform,  # noqa: E402
                               interval_weights)
 from mpeg4fba.formats.gltf import dumps_glb, dumps_gltf, face_to_gltf, write_glb  # noqa: E402
-from mpeg4fba.formats.morph_targets import _Gltf  # noqa: E402
+from mpeg4fba.formats.gltf_file import Gltf  # noqa: E402
 from mpeg4fba.models.reference_head import reference_head  # noqa: E402
 
 REPO = Path(__file__).resolve().parents[1]
@@ -119,7 +119,7 @@ class Evaluated:
     matrices and morphed positions at each keyframe."""
 
     def __init__(self, path):
-        self.g = _Gltf(path)
+        self.g = Gltf(path)
         self.doc = self.g.doc
         self.parent = {c: i for i, n in enumerate(self.doc.nodes) for c in n.children or []}
         self.by_name = {n.name: i for i, n in enumerate(self.doc.nodes)}

@@ -362,17 +362,23 @@ def test_heads_once_misread_are_read(data, detect, draw, index, variant):
 OPEN_MOUTHS = [(5353, 0.3), (6161, 0.6)]
 
 
-@pytest.mark.parametrize("seed,jaw", OPEN_MOUTHS, ids=[f"{s}-jaw{j}" for s, j in OPEN_MOUTHS])
-def test_an_open_mouth_is_read_and_said_to_be_open(data, detect, seed, jaw):
-    from mpeg4fba.cli.points import describe_found
-    V = ict.identity(data, seed) + jaw * data.expressions["jawOpen"]
+def _posed(data, detect, seed: int, pose: dict) -> tuple:
+    """(found points, id -> error against the landmarks in % ES0, landmarks) of person
+    ``seed`` with ICT's expressions ``pose`` (name -> weight) added, unplaced."""
+    V = ict.identity(data, seed) + sum(w * data.expressions[k] for k, w in pose.items())
     face = ict.ict_face(data, V)
     es = float(np.linalg.norm(face.points["3.5"] - face.points["3.6"]))
     lm = ict.landmark_points(data, V)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         found = detect.find_feature_points(ict.placed_face(face, None))
-    err = {k: float(np.linalg.norm(found.points[k] - lm[k]) / es * 100) for k in lm}
+    return found, {k: float(np.linalg.norm(found.points[k] - lm[k]) / es * 100) for k in lm}, lm
+
+
+@pytest.mark.parametrize("seed,jaw", OPEN_MOUTHS, ids=[f"{s}-jaw{j}" for s, j in OPEN_MOUTHS])
+def test_an_open_mouth_is_read_and_said_to_be_open(data, detect, seed, jaw):
+    from mpeg4fba.cli.points import describe_found
+    found, err, lm = _posed(data, detect, seed, {"jawOpen": jaw})
     assert err["2.2"] < 5 and err["2.3"] < 5, err
     assert max(err.values()) < 10, max(err.items(), key=lambda kv: kv[1])
     gap = lm["2.2"][1] - lm["2.3"][1]
@@ -395,25 +401,14 @@ CHINS = [(318855079, 1.0), (1829395269, 1.0), (671399744, 0.0)]
 
 @pytest.mark.parametrize("seed,jaw", CHINS, ids=[f"{s}-jaw{j}" for s, j in CHINS])
 def test_the_chin_is_read_on_the_chin(data, detect, seed, jaw):
-    V = ict.identity(data, seed) + jaw * data.expressions["jawOpen"]
-    face = ict.ict_face(data, V)
-    es = float(np.linalg.norm(face.points["3.5"] - face.points["3.6"]))
-    lm = ict.landmark_points(data, V)
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        found = detect.find_feature_points(ict.placed_face(face, None))
-    err = {k: float(np.linalg.norm(found.points[k] - lm[k]) / es * 100) for k in ("2.1", "8.2")}
-    assert err["2.1"] < 8 and err["8.2"] < 8, err
+    _, err, _ = _posed(data, detect, seed, {"jawOpen": jaw})
+    assert err["2.1"] < 8 and err["8.2"] < 8, (err["2.1"], err["8.2"])
 
 
 def test_closed_eyes_are_said(data, detect):
     # ICT's eyeBlink at full weight on both eyes: no opening is seen, and the lid points
     # (the fitted template's open lids, the upper ones 10 % of the eye distance high) are
     # flagged rather than given at the confidence of points read off the geometry
-    seed = 612987514
-    V = ict.identity(data, seed) + data.expressions["eyeBlink_L"] + data.expressions["eyeBlink_R"]
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        found = detect.find_feature_points(ict.placed_face(ict.ict_face(data, V), None))
+    found, _, _ = _posed(data, detect, 612987514, {"eyeBlink_L": 1.0, "eyeBlink_R": 1.0})
     assert any("no eye opening seen" in n for n in found.notes)
     assert max(found.confidence[k] for k in ("3.1", "3.2", "3.3", "3.4")) <= 0.2

@@ -168,3 +168,21 @@ def test_fapu_warns_on_swapped_sides_and_implausible_values():
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         FAPU.from_feature_points(face_points())       # a plausible face: no warning
+
+
+def test_closed_eyes_give_a_fapu_the_cloner_refuses_with_the_reason():
+    # the lids' points of a head scanned with its eyes shut: IRISD0 is not positive, and
+    # both the FAPU's warning and the cloner's refusal say the eyes may be closed
+    import warnings
+
+    from mpeg4fba.cloning.normalise import region_factors
+    from mpeg4fba.fba.fapu import FAPU
+    from mpeg4fba.fba.featurepoints import FeaturePointSet
+    pts = {"3.1": (3, 4.0, 0), "3.3": (3, 4.05, 0), "3.5": (3, 4.5, 0), "3.6": (-3, 4.5, 0),
+           "9.15": (0, 1, 1), "2.2": (0, -0.5, 1), "8.3": (2.5, -0.5, 0.8), "8.4": (-2.5, -0.5, 0.8)}
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        fapu = FAPU.from_feature_points(pts)
+    assert any("eyes closed" in str(w.message) for w in caught)
+    with pytest.raises(ValueError, match="IRISD0 = -0.05 is not positive.*eyes closed"):
+        region_factors(FeaturePointSet(pts), fapu)

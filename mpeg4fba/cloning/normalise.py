@@ -124,7 +124,8 @@ def region_factors(points: FeaturePointSet, fapu: FAPU) -> tuple:
     factors = np.array([[fapu[u] for u in point_units(i)] for i in ids],
                        dtype=np.float64).reshape(len(ids), 3)
     if not (factors > 0).all():
-        raise ValueError(f"normalisation needs positive FAPUs, got {fapu.as_dict()}")
+        bad = [x for x in fapu.problems() if "not positive" in x] or [str(fapu.as_dict())]
+        raise ValueError("normalisation needs positive FAPUs: " + "; ".join(bad))
     return ids, factors
 
 

@@ -148,7 +148,8 @@ class FAPU:
                         "are swapped, or the face looks along -z",
                  "MW0": "the face's left lip corner (8.3) should have the larger x: left and "
                         "right are swapped",
-                 "IRISD0": "the upper eyelid (3.1) should be above the lower one (3.3): is y up?",
+                 "IRISD0": "the upper eyelid (3.1) should be above the lower one (3.3): is y "
+                           "up, or are the eyes closed? (MPEG-4's neutral face has them open)",
                  "ENS0": "the pupil (3.5) should be above the nose (9.15): is y up?",
                  "MNS0": "the nose (9.15) should be above the upper lip (2.2): is y up?"}
         for name, value in self.as_dict().items():

@@ -29,6 +29,7 @@ MISSING = ("10.9", "10.10")
 REASONS = {"10.9": "no ear found on the left", "10.10": "no ear found on the right",
            "2.1": "the chin is flat here"}
 UNITS = "metres; x = the face's left, y = up, z = forward"
+NOTES = ("the mouth is open <a little>",)
 
 
 @pytest.fixture(scope="module")
@@ -63,7 +64,7 @@ def fapu() -> FAPU:
 def page(face, points, confidences, fapu) -> str:
     return point_editor_html(face, points, confidences=confidences, missing=MISSING,
                              reasons=REASONS, title="Review <head>", fapu=fapu, units=UNITS,
-                             filename="head.json")
+                             filename="head.json", notes=NOTES)
 
 
 # --------------------------------------------------------------------------- the page
@@ -96,6 +97,7 @@ def test_page_carries_every_point_and_the_missing_ones(page, face, points, confi
     assert [(m["id"], m["reason"]) for m in data["missing"]] == [(k, REASONS[k]) for k in MISSING]
     assert "ear" in data["missing"][0]["name"]
     assert 'id="missing"' in page and "Missing required points" in page
+    assert data["notes"] == list(NOTES)
     meshes = {m["name"]: m for m in data["meshes"]}
     assert set(meshes) == {n for n, m in face.meshes.items() if len(m.triangles)}
     skin = np.frombuffer(base64.b64decode(meshes["Skin"]["positions"]), "<f8").reshape(-1, 3)
@@ -242,6 +244,7 @@ def test_the_page_shows_the_missing_points_and_every_label(editor, points):
     for fp in MISSING:
         assert fp in text and REASONS[fp] in text
     assert editor.page.text_content("#missinghead") == "Missing required points (2)"
+    assert editor.page.inner_text("#notes") == NOTES[0]          # shown as text, not markup
     labels = editor.js("[...document.querySelectorAll('#labels .lab')].map(e => e.textContent)")
     assert sorted(labels) == sorted(points.ids + list(MISSING))
     assert len(editor.page.query_selector_all("#rows tr")) == len(points.ids) + len(MISSING)

@@ -109,6 +109,7 @@ def test_points_edit_writes_the_review_page(files, found_run):
     data = editor_data(page)
     conf = read_confidences(files / "head.json")
     assert {row["id"]: row["confidence"] for row in data["points"]} == conf
+    assert data["notes"] == []                 # given points: nothing found to say about the head
     assert np.allclose(data["view"]["up"], [0, 1, 0], atol=0.2)      # the mouth stands forward of the eyes: about 10 degrees
     assert np.allclose(data["view"]["forward"], [0, 0, 1], atol=0.2)
 

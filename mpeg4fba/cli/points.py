@@ -129,11 +129,13 @@ def _points(head: str, output: str, edit: bool, given: Optional[str], snap: bool
         wanted = required_points(base=REQUIRED_POINTS)
         missing = tuple(points.missing(wanted))
         reasons = {k: "not in the point file" for k in missing}
+        notes: tuple = ()
     else:
         t0 = time.perf_counter()
         found = find_feature_points(face)
         click.echo(describe_found(found, what, time.perf_counter() - t0))
         points, confidence, missing, reasons = found.points, found.confidence, found.missing, found.reasons
+        notes = found.notes
         up, forward = found.up, found.forward
     # positions are exact; a vertex ref only names the nearest vertex (a reader would
     # move the point onto it), so the sidecar keeps positions only
@@ -142,7 +144,8 @@ def _points(head: str, output: str, edit: bool, given: Optional[str], snap: bool
     if edit:
         from ..render.point_editor import write_point_editor
         write_point_editor(output, face, plain, confidences=confidence or None, missing=missing,
-                           reasons=reasons, title=f"feature points of {what}", up=up, forward=forward)
+                           reasons=reasons, title=f"feature points of {what}", up=up, forward=forward,
+                           notes=notes)
     else:
         from ..formats.fpjson import write_feature_points_json
         write_feature_points_json(plain, output, confidences=confidence or None)

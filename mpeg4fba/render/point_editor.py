@@ -172,11 +172,13 @@ def point_editor_html(face, points: FeaturePointSet, *, confidences: Optional[Ma
                       missing: Iterable = (), reasons: Optional[Mapping] = None,
                       title: str = "Feature points", fapu=None, units: Optional[str] = None,
                       filename: str = "points.json", up: Optional[Iterable[float]] = None,
-                      forward: Optional[Iterable[float]] = None) -> str:
+                      forward: Optional[Iterable[float]] = None, notes: Iterable[str] = ()) -> str:
     """One self-contained HTML page to review and move ``points`` on ``face``.
 
     ``up`` and ``forward`` (model coordinates; default +y and +z) say how the head
-    stands, so that the page opens on its face (a +Z-up head, one facing +X).
+    stands, so that the page opens on its face (a +Z-up head, one facing +X).  ``notes``
+    (what the finder says about the head as a whole: an open mouth, an eye with no
+    opening) are shown above the panel's lists.
 
     ``confidences`` (``{id: 0..1}``) colour the points, ``missing`` lists required
     points not found (``reasons`` says why, ``{id: text}``; a reason for a given point
@@ -195,6 +197,7 @@ def point_editor_html(face, points: FeaturePointSet, *, confidences: Optional[Ma
     """
     data = _payload(face, points, confidences, missing, reasons, fapu, units, str(filename))
     data["view"] = _view(up, forward)
+    data["notes"] = [str(n) for n in notes]
     fill = {"LICENSE": _licence(), "VERSION": THREE_VERSION, "IMPORTMAP": _import_map_json(),
             "DATA": _script_json(data), "JS": _EDITOR_JS, "TITLE": html.escape(str(title)),
             "FAIL": failure_script("__editor", "editor")}
@@ -249,6 +252,7 @@ html,body{margin:0;height:100%;overflow:hidden;background:#8e9196;color:#e8e8e8;
 #status{position:fixed;left:12px;bottom:10px;right:352px;padding:5px 9px;border-radius:5px;background:#1e2024d0;pointer-events:none}
 #panel{position:fixed;top:0;right:0;bottom:0;width:340px;box-sizing:border-box;display:flex;flex-direction:column;padding:8px 10px;background:#1e2024}
 #missing{max-height:30vh;overflow:auto;flex:none}
+#notes div{margin:2px 0 6px;padding:5px 7px;border-radius:4px;background:#5a4a10;font-size:12px}
 #tablebox{flex:1;min-height:120px;overflow:auto}
 #panel h2{margin:10px 0 4px;font-size:11px;font-weight:600;letter-spacing:.06em;text-transform:uppercase;color:#aab}
 #legend .bar{height:10px;border-radius:3px;background:linear-gradient(to right,hsl(0,80%,45%),hsl(60,80%,45%),hsl(120,80%,45%))}
@@ -283,6 +287,7 @@ label{font-size:12px;color:#ccd}
 <div id="title">@TITLE@</div>
 <div id="status">Loading...</div>
 <div id="panel">
+<div id="notes"></div>
 <h2>Confidence</h2>
 <div id="legend"><div class="bar"></div><div class="ends"><span>0 (a guess)</span><span>0.5</span><span>1 (certain)</span></div>
 <div style="font-size:11px;color:#ccd;margin-top:3px"><span class="sw" style="background:#3d8bfd"></span>no confidence given &nbsp; <span class="sw" style="background:#ffe14d"></span>selected</div></div>
@@ -508,6 +513,7 @@ async function main() {
       tr.addEventListener('click', () => select(id));
       rowOf.set(id, tr);
     }
+    for (const n of D.notes || []) $('notes').appendChild(document.createElement('div')).textContent = n;
     const box = $('missing');
     if (!D.missing.length) { box.className = 'none'; box.textContent = 'none'; }
     for (const m of D.missing) {

@@ -115,14 +115,13 @@ from ..fba.requirements import FAPU_POINTS, PART_POINTS, required_points
 from . import frontview, headframe, midline, misread
 from .frontview import PUPIL_OPENINGS
 from .convention import convention_points, shift_to_convention
-from .template import (MIRROR, Template, boundary_vertices, opening_boxes, opening_landmarks,
-                       reference_template)
+from .template import MIRROR, Template, opening_boxes, opening_landmarks, reference_template
 from .headframe import FIT_LIMIT, SYMMETRY_LIMIT, FaceNotFoundError
 from .alignment import REQUIRED_POINTS
 from .parts import is_eyeball
 from .registration import register_surface
 from .seams import weld_seams
-from .surface import closest_points, feature_warp
+from .surface import boundary_vertices, closest_points, feature_warp
 
 __all__ = ["FaceNotFoundError", "FoundPoints", "find_feature_points", "PART_OF",
            "CRISP_POINTS", "TEMPLATE_ES_MM", "FIT_LIMIT",
@@ -443,12 +442,8 @@ def _parts(pieces: headframe.Pieces, s, R, t, X, tpl: Template, pos, tie, reason
     members = {int(c): order[bounds[c]:bounds[c + 1]] for c in others}
     cent = {c: Vt[m].mean(0) for c, m in members.items()}
     ext = {c: float(np.ptp(Vt[m], axis=0).max()) for c, m in members.items()}
-    T = pieces.T
-    e = np.sort(np.concatenate([T[:, [0, 1]], T[:, [1, 2]], T[:, [2, 0]]]), axis=1)
-    _, inv, cnt = np.unique(e, axis=0, return_inverse=True, return_counts=True)
-    open_comp = np.unique(pieces.comp[e[cnt[inv.ravel()] == 1, 0]])
     # closed: no edge on the boundary (an eyeball is; a socket or an open shell is not)
-    open_set = set(open_comp.tolist())
+    open_set = set(np.unique(pieces.comp[boundary_vertices(pieces.T, len(pieces.V))]).tolist())
     closed = {int(c): int(c) not in open_set for c in others}
     used = set()
     # eyes

@@ -16,8 +16,8 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.spatial import cKDTree
 
-__all__ = ["closest_points", "point_triangle", "feature_warp", "boundary_loops", "boundary_vertices", "neck_cut",
-           "loop_correspondence", "vertex_normals", "triangle_normals", "triangle_edges",
+__all__ = ["closest_points", "point_triangle", "feature_warp", "boundary_loops",
+           "boundary_vertices", "neck_cut", "loop_correspondence", "vertex_normals", "triangle_normals", "triangle_edges",
            "surface_weights", "triangle_neighbours", "onto_same_sheet"]
 
 def _dot(a: np.ndarray, b: np.ndarray) -> np.ndarray:

@@ -19,7 +19,7 @@ from . import frontview, midline
 from .surface import boundary_vertices, closest_points
 
 __all__ = ["TEMPLATE_SHIFT", "PAIRS", "MIRROR", "Template", "reference_template", "shift_anchors",
-           "boundary_vertices", "opening_boxes", "opening_landmarks"]
+           "opening_boxes", "opening_landmarks"]
 
 # left/right pairs (the face's left first): mirror partners of the shifts, and the
 # symmetry part of the detector's confidence

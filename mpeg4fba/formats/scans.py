@@ -70,9 +70,7 @@ def read_scan(path: Union[str, "os.PathLike[str]"]) -> tuple:
     tris = []
     for block in mesh.cells:
         data = np.asarray(block.data)
-        if block.type == "triangle" or (block.type.startswith("polygon") and data.ndim == 2):
-            tris.append(_fan(data.astype(np.int64)))
-        elif block.type == "quad":
+        if block.type in ("triangle", "quad") or (block.type.startswith("polygon") and data.ndim == 2):
             tris.append(_fan(data.astype(np.int64)))
     T = np.concatenate(tris) if tris else np.zeros((0, 3), dtype=np.int64)
     if not len(T):

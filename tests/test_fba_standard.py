@@ -186,3 +186,9 @@ def test_closed_eyes_give_a_fapu_the_cloner_refuses_with_the_reason():
     assert any("eyes closed" in str(w.message) for w in caught)
     with pytest.raises(ValueError, match="IRISD0 = -0.05 is not positive.*eyes closed"):
         region_factors(FeaturePointSet(pts), fapu)
+    # lids all but touching: a warning that asks the same
+    pts["3.3"] = (3, 3.95, 0)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        FAPU.from_feature_points(pts)
+    assert any("0.01 times ES0" in str(w.message) and "eyes closed" in str(w.message) for w in caught)

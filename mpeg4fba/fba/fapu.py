@@ -160,7 +160,10 @@ class FAPU:
                 value = getattr(self, name)
                 ratio = value / self.ES0
                 if value > 0 and not lo <= ratio <= hi:
+                    shut = name == "IRISD0" and ratio < lo
                     out.append(f"FAPU {name} = {value:g} is {ratio:.2f} times ES0 = {self.ES0:g}; "
                                f"faces have {lo}-{hi}: check the feature points it is measured "
-                               f"between ({' and '.join(FAPU_POINTS[name])})")
+                               f"between ({' and '.join(FAPU_POINTS[name])})"
+                               + ("; are the eyes closed? (MPEG-4's neutral face has them open)"
+                                  if shut else ""))
         return out

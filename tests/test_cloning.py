@@ -262,6 +262,26 @@ def test_the_rims_field_is_held_at_0_at_the_holes_corners_only():
     assert (got[lower] == LOWER).all()
 
 
+def test_a_holes_rims_part_at_its_own_corners_whatever_the_mid_line():
+    """A mouth hole is a lens: near each corner the lower rim runs nearly level with the
+    corner.  Split where the loop meets the mid line's height, corner points 0.01 low
+    put both ends 0.05 inside the corners, on the lower lip, and its last stretch went
+    with the upper rim.  The ends are the hole's outermost vertices."""
+    from mpeg4fba.cloning.lips import _rims
+    x = np.linspace(-0.3, 0.3, 61)
+    h = 0.03 * (1 - (x / 0.3) ** 2)
+    # one loop: the upper arc left to right, then the lower arc back (corners once)
+    uv = np.vstack([np.c_[x, h], np.c_[x[-2:0:-1], -h[-2:0:-1]]])
+    loop = np.arange(len(uv))
+    for low in (-0.01, 0.0, 0.01):
+        mid = np.array([[-0.3, low], [0.0, low], [0.3, low]])
+        up, down, ends = _rims(uv, [loop], np.ones(len(uv), bool), mid, np.array([0.0, 1.0]),
+                               guard=0.0)
+        assert sorted(np.round(uv[ends, 0], 6).tolist()) == [-0.3, 0.3]
+        assert (uv[up, 1] > 0).all() and (uv[down, 1] < 0).all()
+        assert up.sum() + down.sum() == len(uv) - 2
+
+
 def test_slit_sides_say_how_clearly_the_mesh_settled_each_vertex():
     """The field that settled a vertex: 1 / -1 on the hole's rims, its sign the side,
     NaN where the polygons alone said the side."""

@@ -265,7 +265,7 @@ def test_the_rims_field_is_held_at_0_at_the_holes_corners_only():
 def test_a_holes_rims_part_at_its_own_corners_whatever_the_mid_line():
     """A mouth hole is a lens: near each corner the lower rim runs nearly level with the
     corner.  Split where the loop meets the mid line's height, corner points 0.01 low
-    put both ends 0.05 inside the corners, on the lower lip, and its last stretch went
+    put both ends 0.06 inside the corners, on the lower lip, and its last stretch went
     with the upper rim.  The ends are the hole's outermost vertices."""
     from mpeg4fba.cloning.lips import _rims
     x = np.linspace(-0.3, 0.3, 61)

@@ -355,7 +355,14 @@ def test_a_hole_where_the_nose_is_is_said_not_guessed():
     assert worst < 0.08 * es
 
 
-def test_closed_eyes_are_said_and_their_lid_points_flagged():
+@pytest.fixture(scope="module")
+def whole_found():
+    """The points found on a whole reference head (seed 3), found once for the tests
+    that only need a whole head to pass."""
+    return find_feature_points(reference_head(resolution=0.5, seed=3))
+
+
+def test_closed_eyes_are_said_and_their_lid_points_flagged(whole_found):
     # the skin's eye holes capped (lids shut, as scans are often taken): no opening is
     # seen, so the lid points are the fitted template's open lids, said in a note and on
     # each point, with a low confidence (a closed ICT eye's upper lid was placed 10 % of
@@ -380,12 +387,11 @@ def test_closed_eyes_are_said_and_their_lid_points_flagged():
     lids = ("3.1", "3.2", "3.3", "3.4", "3.7", "3.8", "3.11", "3.12")
     assert all(found.confidence[k] <= 0.2 and "no eye opening" in found.reasons[k] for k in lids)
     assert "note: no eye opening seen" in describe_found(found, "the head")
-    assert find_feature_points(head).notes == ()            # the open eyes: nothing said
+    assert whole_found.notes == ()                          # the open eyes: nothing said
 
 
-def test_eyeballs_away_from_the_eyes_found_say_the_face_was_misread():
+def test_eyeballs_away_from_the_eyes_found_say_the_face_was_misread(whole_found):
     from mpeg4fba.cloning import misread
-    head = reference_head(resolution=0.5, seed=3)
     # the eyes' lids found a whole eye separation above their eyeballs
     pos = {k: np.array(v, dtype=float) for k, v in
            {"3.5": [0.5, 0, 1], "3.7": [0.7, 1, 1], "3.11": [0.3, 1, 1], "3.1": [0.5, 1.1, 1],
@@ -394,7 +400,7 @@ def test_eyeballs_away_from_the_eyes_found_say_the_face_was_misread():
         misread.eyes_round_their_eyeballs(pos)
     pos["3.5"] = np.array([0.52, 0.95, 1.0])
     misread.eyes_round_their_eyeballs(pos)                  # round it: fine
-    assert find_feature_points(head).points            # a whole head passes both checks
+    assert whole_found.points                               # a whole head passes both checks
 
 
 def test_an_empty_face_is_refused():

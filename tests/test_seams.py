@@ -29,6 +29,14 @@ def cut(head):
     return cut_at_seams(head)
 
 
+@pytest.fixture(scope="module")
+def whole(head):
+    """The points found on the head as it is, the yardstick of the cut ones."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return find_feature_points(head)
+
+
 def test_the_cut_head_has_its_islands_apart(cut):
     from mpeg4fba.cloning.parts import mesh_components
     face, origin = cut
@@ -62,21 +70,19 @@ def test_copies_a_fat_moves_apart_stay_apart():
     assert w.face.meshes["Skin"].triangles.tolist() == [[0, 1, 2], [3, 5, 2]]
 
 
-def test_points_are_found_on_a_triangle_soup(head):
+def test_points_are_found_on_a_triangle_soup(head, whole):
     soup, origin = triangle_soup(head)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        whole = find_feature_points(head)
         found = find_feature_points(soup)
     es = float(np.linalg.norm(head.points["3.5"] - head.points["3.6"]))
     assert set(found.points) == set(whole.points)
     assert max(np.linalg.norm(found.points[k] - whole.points[k]) for k in whole.points) < 0.02 * es
 
 
-def test_points_are_found_on_a_head_cut_at_seams(head, cut):
+def test_points_are_found_on_a_head_cut_at_seams(head, cut, whole):
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        whole = find_feature_points(head)
         found = find_feature_points(cut[0])
     assert set(found.points) == set(whole.points)
     es = float(np.linalg.norm(head.points["3.5"] - head.points["3.6"]))

@@ -323,6 +323,27 @@ def test_lips_groove_ends_at_the_commissures():
     assert F.mouth_points(V2, T2, np.array([0.0, -1.05, 1.0])) == {}
 
 
+def test_the_mouth_corners_do_not_follow_the_depth_grids_phase():
+    """One depth grid puts a groove's end on whichever cell it happens to fall in: the
+    same face shifted by fractions of a cell read its commissures up to a cell apart.
+    Read on several phases of the grid (MOUTH_PHASES), each point the median, they keep
+    to a quarter of that."""
+    def z(X, Y):
+        depth = 0.03 * np.clip((0.37 - np.abs(X)) / 0.02, 0, 1)
+        return 1.0 - 0.3 * X ** 2 - depth * np.exp(-0.5 * ((Y + 1.05) / 0.015) ** 2)
+    V, T = _grid(np.arange(-0.8, 0.8 + 1e-9, 0.01), np.arange(-1.3, -0.8, 0.005), z)
+    spread = {}
+    for phases in (1, F.MOUTH_PHASES):
+        xs = []
+        for s in np.linspace(0.0, F.DEPTH_CELL, 7)[:-1]:
+            d = np.array([s, 0.37 * s, 0.0])
+            got = F.mouth_points(V + d, T, np.array([0.0, -1.05, 1.0]) + d, phases=phases)
+            xs.append([got[k][0] - s for k in ("8.3", "8.4")])
+        spread[phases] = np.ptp(np.array(xs), axis=0)
+    assert (spread[1] > 0.5 * F.DEPTH_CELL).all()
+    assert (spread[F.MOUTH_PHASES] < 0.5 * spread[1]).all()
+
+
 def test_an_open_mouths_inner_corners_lie_between_its_lips():
     # the lips' groove of the test above, opened into a lens 0.16 ES tall at the mid
     # line that closes at the commissures: still 0.04 ES tall where the inner corners

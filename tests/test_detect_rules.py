@@ -305,13 +305,17 @@ def test_eyes_lower_than_the_templates_are_found():
     assert got["3.3"][1] == pytest.approx(-0.35, abs=0.02)
 
 
-def test_lips_groove_ends_at_the_commissures():
-    # a face front (z = 1 - 0.3 x^2) with a groove 0.03 ES deep along y = -1.05 for
-    # |x| < 0.35, fading over 0.02 ES beyond
+def _lip_groove_face(step: float) -> tuple:
+    """(V, T): a face front (z = 1 - 0.3 x^2) with a groove 0.03 ES deep along y = -1.05
+    for |x| < 0.35, fading over 0.02 ES beyond; columns ``step`` apart."""
     def z(X, Y):
         depth = 0.03 * np.clip((0.37 - np.abs(X)) / 0.02, 0, 1)
         return 1.0 - 0.3 * X ** 2 - depth * np.exp(-0.5 * ((Y + 1.05) / 0.015) ** 2)
-    V, T = _grid(np.arange(-0.8, 0.8 + 1e-9, 0.01), np.arange(-1.3, -0.8, 0.005), z)
+    return _grid(np.arange(-0.8, 0.8 + 1e-9, step), np.arange(-1.3, -0.8, 0.005), z)
+
+
+def test_lips_groove_ends_at_the_commissures():
+    V, T = _lip_groove_face(0.01)
     got = F.mouth_points(V, T, np.array([0.0, -1.05, 1.0]))
     assert got["8.3"][0] == pytest.approx(0.36, abs=0.02)
     assert got["8.4"][0] == pytest.approx(-0.36, abs=0.02)
@@ -328,10 +332,7 @@ def test_the_mouth_corners_do_not_follow_the_depth_grids_phase():
     same face shifted by fractions of a cell read its commissures up to a cell apart.
     Read on several phases of the grid (MOUTH_PHASES), each point the median, they keep
     to a quarter of that."""
-    def z(X, Y):
-        depth = 0.03 * np.clip((0.37 - np.abs(X)) / 0.02, 0, 1)
-        return 1.0 - 0.3 * X ** 2 - depth * np.exp(-0.5 * ((Y + 1.05) / 0.015) ** 2)
-    V, T = _grid(np.arange(-0.8, 0.8 + 1e-9, 0.01), np.arange(-1.3, -0.8, 0.005), z)
+    V, T = _lip_groove_face(0.01)
     spread = {}
     for phases in (1, F.MOUTH_PHASES):
         xs = []
@@ -348,10 +349,7 @@ def test_an_open_mouths_inner_corners_lie_between_its_lips():
     # the lips' groove of the test above, opened into a lens 0.16 ES tall at the mid
     # line that closes at the commissures: still 0.04 ES tall where the inner corners
     # go, which lie between the lips there, not on the upper lip's edge
-    def z(X, Y):
-        depth = 0.03 * np.clip((0.37 - np.abs(X)) / 0.02, 0, 1)
-        return 1.0 - 0.3 * X ** 2 - depth * np.exp(-0.5 * ((Y + 1.05) / 0.015) ** 2)
-    V, T = _grid(np.arange(-0.8, 0.8 + 1e-9, 0.005), np.arange(-1.3, -0.8, 0.005), z)
+    V, T = _lip_groove_face(0.005)
     c = V[T].mean(1)
     half = 0.08 * np.clip(1 - (c[:, 0] / 0.36) ** 2, 0, None)
     T = T[~(np.abs(c[:, 1] + 1.05) < half)]

@@ -245,7 +245,9 @@ def find_feature_points(face: FaceModel, *, ids: Optional[Iterable[str]] = None)
     # target's, held at them
     prof = midline.profile(Vt, ST, 0.6, -2.5)
     misread.no_hole_on_the_nose(prof)
-    prof_pts = midline.profile_points(prof, 0.0, lambda p: bool(frontview.mouth_points(Vt, ST, p, phases=1)))
+    # (whether there is a mouth at p: one phase of the grid says as much as five)
+    prof_pts = midline.profile_points(
+        prof, 0.0, lambda p: bool(frontview.mouth_points(Vt, ST, p, phases=1)))
     eye_pts = frontview.eye_points(Vt, ST, tpl)
     notes = []
     # an eye with no opening seen from the front: closed lids (scans are often taken with

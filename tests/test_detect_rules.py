@@ -268,6 +268,26 @@ def test_eye_opening_seen_from_the_front():
     assert F.eye_opening(V2, T2, np.array([0.5, 0.0, 0.0]), left=True) == {}
 
 
+def test_the_eye_corners_do_not_follow_the_depth_grids_phase():
+    """As the mouth's (below): an eye's opening shifted by sixths of a cell under the
+    same search centre read its corners a cell apart on one grid; on EYE_PHASES phases,
+    each point the median, within a quarter of that."""
+    V, T = _grid(np.arange(-0.2, 1.2, 0.01), np.arange(-0.5, 0.5, 0.01),
+                 lambda X, Y: 1.0 - 0.2 * (X - 0.5) ** 2)
+    c = V[T].mean(1)
+    T = T[((c[:, 0] - 0.5) / 0.17) ** 2 + (c[:, 1] / 0.06) ** 2 >= 1.0]
+    spread = {}
+    for phases in (1, F.EYE_PHASES):
+        xs = []
+        for s in np.linspace(0.0, F.DEPTH_CELL, 7)[:-1]:
+            got = F.eye_opening(V + [s, 0.37 * s, 0.0], T, np.array([0.5, 0.0, 1.0]), left=True,
+                                phases=phases)
+            xs.append([got[k][0] - s for k in ("out", "in")])
+        spread[phases] = np.ptp(np.array(xs), axis=0)
+    assert (spread[1] > 0.5 * F.DEPTH_CELL).all()
+    assert (spread[F.EYE_PHASES] < 0.5 * spread[1]).all()
+
+
 def _two_eyes(inner: float, outer: float, y0: float = 0.0):
     """A flat skin (z = 1) with a rectangular opening per eye from |x| = ``inner`` to
     ``outer``, 0.1 tall round y = ``y0``, and the template's eyes at y = 0."""
@@ -293,6 +313,32 @@ def test_an_eye_opening_cut_short_gets_its_inner_corner_by_proportion():
     assert got["3.11"][0] == pytest.approx(F.INNER_CANTHAL_RATIO * got["3.7"][0], abs=0.005)
     assert got["3.8"][0] == pytest.approx(-F.INNER_CANTHAL_RATIO * got["3.7"][0], abs=0.02)
     assert got["3.11"][1] == pytest.approx(0.0, abs=0.06) and got["3.11"][2] == pytest.approx(1.0)
+
+
+def test_an_inner_corner_moves_to_the_proportion_by_degrees():
+    """Over INNER_CANTHAL_BAND the inner corner goes from the opening's end to the canthi's
+    proportion in proportion: openings ending a hundredth further out each time move it by
+    no more than that (a switch at one ratio moved it 6 % of the eye distance at once)."""
+    xs = []
+    for inner in np.arange(0.27, 0.39, 0.01):
+        V, T, tpl = _two_eyes(inner, 0.65)
+        xs.append(F.eye_points(V, T, tpl)["3.11"][0])
+    steps = np.diff(xs)
+    assert np.abs(steps).max() < 0.02
+    assert xs[0] == pytest.approx(0.27, abs=0.01)                 # below the band: as read
+    assert xs[-1] == pytest.approx(F.INNER_CANTHAL_RATIO * 0.65, abs=0.01)  # above: proportion
+
+
+def test_an_inner_corner_moved_a_little_stays_on_the_face():
+    """Moved only a little, an inner corner can still be over the opening, where the first
+    skin seen from the front is the inside of the head: it keeps the opening end's depth
+    (a fresh decimated ICT head had 3.8 put 2.6 eye separations behind its face so, and
+    the whole head misread)."""
+    back = _grid(np.arange(-1.0, 1.0, 0.05), np.arange(-0.7, 0.5, 0.05), lambda X, Y: X * 0 - 1.0)
+    for inner in np.arange(0.28, 0.37, 0.0025):
+        V, T, tpl = _two_eyes(inner, 0.65)
+        got = F.eye_points(np.vstack([V, back[0]]), np.vstack([T, back[1] + len(V)]), tpl)
+        assert got["3.11"][2] == pytest.approx(1.0) and got["3.8"][2] == pytest.approx(1.0), inner
 
 
 def test_eyes_lower_than_the_templates_are_found():

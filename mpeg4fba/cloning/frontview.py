@@ -169,7 +169,8 @@ def mouth_points(Vt: np.ndarray, T: np.ndarray, stomion: np.ndarray,
 #: Five phases, on the regression draw's 80 heads (points only): all points' median / p95
 #: 1.49 / 4.68 -> 1.44 / 4.56 % ES0, the full heads' inner lips' p95 2.3-2.7 -> 1.5-1.9; on
 #: a fresh draw (seed 4701) 1.43 / 4.87 -> 1.39 / 4.69; three phases gave 1.46 / 4.61 on the
-#: regression draw.  Each phase costs a depth map and a groove (about 0.1 s a head).
+#: regression draw.  The phases share one sampling of the skin (:func:`front_samples`);
+#: each costs a binning of it and a groove.
 MOUTH_PHASES = 5
 
 
@@ -210,12 +211,12 @@ def mouth(Vt: np.ndarray, T: np.ndarray, stomion: np.ndarray, gap: float = 0.0,
     return _phase_median(points, lambda d: _mouth_once(Vt, T, stomion, gap, d, Q)[0], n), edges
 
 
-def _mouth_box(stomion: np.ndarray, gap: float) -> tuple:
-    """(lo, hi) of the mouth's depth map: the mouth's width either side of the mid line,
-    both lips (``gap`` apart at the mid line) and a margin above and below."""
+def _mouth_box(stomion: np.ndarray, gap: float, mid: float = 0.0) -> tuple:
+    """(lo, hi) of the mouth's depth map: the mouth's width either side of the mid line
+    (at x = ``mid``), both lips (``gap`` apart there) and a margin above and below."""
     half = max(0.2, 0.5 * gap + 0.1)
-    return (np.array([-0.75, stomion[1] - half, stomion[2] - 0.6]),
-            np.array([0.75, stomion[1] + half]))
+    return (np.array([mid - 0.75, stomion[1] - half, stomion[2] - 0.6]),
+            np.array([mid + 0.75, stomion[1] + half]))
 
 
 def _mouth_once(Vt: np.ndarray, T: np.ndarray, stomion: np.ndarray, gap: float = 0.0,
@@ -236,13 +237,12 @@ def _mouth_once(Vt: np.ndarray, T: np.ndarray, stomion: np.ndarray, gap: float =
     by ``-shift`` (the stomion and the mid line with it: as if the skin were moved by
     ``shift``, the points moved back); ``samples``: :func:`front_samples` of the box."""
     d = np.zeros(3) if shift is None else np.asarray(shift, dtype=np.float64)
-    mid = -d[0]                          # the mid line's x
-    lo, hi = _mouth_box(stomion - d, gap)
-    lo, hi = lo - [d[0], 0, 0], hi - [d[0], 0]
+    stomion, mid = stomion - d, -d[0]     # (mid: the mid line's x)
+    lo, hi = _mouth_box(stomion, gap, mid)
     D = depth_map(Vt, T, lo, hi, samples=samples)
     F = np.where(np.isnan(D), -np.inf, D)
     i0 = int((mid - lo[0]) / DEPTH_CELL)
-    j0 = int((stomion[1] - d[1] - lo[1]) / DEPTH_CELL)
+    j0 = int((stomion[1] - lo[1]) / DEPTH_CELL)
     # the deepest cells followed; where that gives no mouth, the cells deepest against
     # their neighbours above and below (a coarse lower lip's facet sloping back below
     # the groove can lead the deepest-cell walk off it: a fresh ICT draw, seed 2045, had
@@ -440,9 +440,10 @@ def _eye_opening_once(Vt: np.ndarray, T: np.ndarray, centre: np.ndarray, left: b
     to 0.6 ES wide and less tall than wide; its corners are its lateral extremes, its lid
     middles the top and bottom of its column half way between them, each taken on the
     skin just outside the opening (the most forward surface there: the lid margin's front
-    edge, not the hole's boundary, which can lie a fifth of an eye separation deeper)."""
+    edge, not the hole's boundary, which can lie a fifth of an eye separation deeper).
+    ``shift`` and ``samples`` as :func:`_mouth_once`'s."""
     from scipy import ndimage
-    if shift is not None:                # (as :func:`_mouth_once`'s)
+    if shift is not None:
         centre = centre - np.asarray(shift, dtype=np.float64)
     lo, hi = _eye_box(centre)
     D = depth_map(Vt, T, lo, hi, samples=samples)

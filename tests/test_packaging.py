@@ -20,6 +20,10 @@ def test_wheel_contains_grammar_and_catalogue(tmp_path):
     names = set(zipfile.ZipFile(wheel).namelist())
     assert "mpeg4fba/grammars/vrml97.lark" in names
     assert "mpeg4fba/vrml/data/nodes.tsv" in names
+    # the point editor's page and script, and the vendored three.js the pages inline
+    for rel in ("render/pages/point_editor.html", "render/pages/point_editor.js",
+                "render/web/three.module.min.js"):
+        assert f"mpeg4fba/{rel}" in names, f"{rel} is missing from the wheel: pyproject's package-data"
     # Every subpackage of the source tree is in the wheel (the package list is explicit).
     for init in (repo / "mpeg4fba").rglob("__init__.py"):
         rel = init.relative_to(repo).as_posix()

@@ -33,7 +33,8 @@ from .checks import PlacementError, check_placement
 from .autopoints import PointReport, complete_points
 from .detect import CRISP_POINTS, FaceNotFoundError, FoundPoints, find_feature_points
 from .snapping import LIP_EDGE_POINTS, SNAP_POINTS, snap_points
-from .fmc import CloneWarning, FacialMotionCloner, PreparedSource, clone, required_points_missing
+from .fmc import CloneWarning, FacialMotionCloner, PreparedSource, required_points_missing
+from .api import METHODS, clone
 from .job import CloneJob
 from .local_frames import (LocalFrameCloner, LocalFrameWarning, TopologyError,
                            local_frame_clone)

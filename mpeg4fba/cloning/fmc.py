@@ -49,7 +49,7 @@ Example
 >>> source = reference_head(resolution=0.5)
 >>> target = reference_head(resolution=0.5, face_width=1.1, jaw=0.9, seed=3)
 >>> target.fat = FAT()
->>> cloned = clone(source, target)
+>>> cloned = FacialMotionCloner(source, target).clone()
 >>> len(cloned.fat.faps), len(cloned.fat.visemes), len(cloned.fat.expressions)
 (66, 14, 6)
 
@@ -76,7 +76,6 @@ from .correspondence import (ALIGNMENTS, DERIVE_DISTANCE, NECK_RATIO,
                              AlignOptions, Correspondence, correspond, derive_points)
 from .errors import CloneWarning, check_choice
 from .lips import LIPS, SIDE_BLEND, SLITS
-from .local_frames import LocalFrameCloner
 from .part_motion import PartMapping
 from .parts import PART_SPECS, find_parts, match_parts, separate_parts, source_transform
 from .points import REQUIRED_POINTS, check_faces, required_points_missing
@@ -88,8 +87,8 @@ from .transfer import map_skin, mesh_entries, motion_scale, source_skin_motion
 from .weights import (FACING, FACING_RESOLUTION, INTERPOLATIONS, OUTSIDE_RULES, OVERLAP_RULES,
                       WeightOptions, mapping_weights, slit_labels, visible_triangles)
 
-__all__ = ["clone", "FacialMotionCloner", "PreparedSource", "CloneWarning", "required_points_missing",
-           "OVERLAP_RULES", "OUTSIDE_RULES", "METHODS", "ALIGNMENTS", "NECK_RATIO",
+__all__ = ["FacialMotionCloner", "PreparedSource", "CloneWarning", "required_points_missing",
+           "OVERLAP_RULES", "OUTSIDE_RULES", "ALIGNMENTS", "NECK_RATIO",
            "INTERPOLATIONS", "FACING", "FACING_RESOLUTION",
            "DERIVE_DISTANCE", "visible_triangles"]
 
@@ -587,23 +586,3 @@ def _with_points(face: FaceModel, ties: dict) -> FaceModel:
         vertices[k] = (mesh, vertex)
     out.points = FeaturePointSet(positions, vertices)
     return out
-
-
-#: The cloning methods :func:`clone` knows.
-METHODS = ("fmc", "local-frames")
-
-
-def clone(source: FaceModel, target: FaceModel, method: str = "fmc", **options) -> FaceModel:
-    """The target face with a FAT for every FAP, viseme and expression of the source's.
-
-    ``method="fmc"`` (default): Facial Motion Cloning, any two faces with the required
-    feature points (``options`` go to :class:`FacialMotionCloner`); FeaturePointError
-    listing the ids when either face lacks some, :class:`CloneWarning` for anything left
-    out or installed.  ``method="local-frames"``: Kong et al.'s local-frame cloning for
-    faces that share a mesh (:class:`~mpeg4fba.cloning.local_frames.LocalFrameCloner`).
-    """
-    if method == "fmc":
-        return FacialMotionCloner(source, target, **options).clone()
-    if method == "local-frames":
-        return LocalFrameCloner(source, target, **options).clone()
-    raise ValueError(f"method must be one of {', '.join(METHODS)}, not {method!r}")

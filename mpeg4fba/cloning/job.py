@@ -20,7 +20,8 @@ from typing import Optional, Union
 from ..fba.face import FaceModel
 from .autopoints import PointReport, complete_points, matched_points
 from .errors import check_choice
-from .fmc import METHODS, FacialMotionCloner, PreparedSource
+from .api import METHODS
+from .fmc import FacialMotionCloner, PreparedSource
 from .local_frames import LocalFrameCloner
 
 __all__ = ["CloneJob"]
@@ -38,7 +39,7 @@ class CloneJob:
     target : FaceModel
         The face that gets the FAT; changed in place: it gets the points found on it.
     method : str
-        One of :data:`~mpeg4fba.cloning.fmc.METHODS`.
+        One of :data:`~mpeg4fba.cloning.api.METHODS`.
     snap : bool
         Move the target's given crisp points onto its geometry.
     check : bool

@@ -4,10 +4,14 @@ the mid plane, the eye opening seen from the front, the lips' groove, the points
 the landmark convention's proportions.  Units are the template's (eye separations, ES)."""
 from __future__ import annotations
 
+import subprocess
+import sys
 from types import SimpleNamespace
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from mpeg4fba.cloning import convention as C
 from mpeg4fba.cloning import detect as D
@@ -433,3 +437,27 @@ def test_front_at_takes_the_most_forward_layer():
     V, T = np.vstack([V1, V2]), np.vstack([T1, T2 + len(V1)])
     z = F.front_at(V, T, np.array([[0.5, 0.5], [2.0, 2.0]]))
     assert z[0] == pytest.approx(0.55) and np.isnan(z[1])
+
+
+@settings(max_examples=300, deadline=None)
+@given(st.lists(st.one_of(st.integers(0, 4).map(float), st.floats(-3, 3), st.just(float("nan"))),
+                max_size=40),
+       st.sampled_from([0.0, 0.0005, 0.5, 1.0, 2.5]))
+def test_the_profiles_peaks_are_scipys(values, prominence):
+    """midline.find_peaks stands in for scipy.signal.find_peaks (whose import costs more
+    than half a detection): the same peaks, plateaus, NaNs and prominences included."""
+    from scipy.signal import find_peaks
+    x = np.array(values, dtype=np.float64)
+    want = find_peaks(x, prominence=prominence or None)[0]
+    assert M.find_peaks(x, prominence).tolist() == want.tolist()
+
+
+def test_detection_does_not_import_scipy_signal():
+    """The import is what the stand-in saves: no module of the detector pulls it in."""
+    code = ("import sys; from mpeg4fba.models import reference_head; "
+            "from mpeg4fba.cloning import find_feature_points; "
+            "find_feature_points(reference_head(resolution=0.5)); "
+            "print('scipy.signal' in sys.modules)")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300)
+    assert out.returncode == 0, out.stderr
+    assert out.stdout.strip() == "False"

@@ -163,6 +163,49 @@ def _farthest(yy: np.ndarray, zz: np.ndarray, i: int, j: int) -> int:
     return i + int(np.argmax((seg - a) @ n))
 
 
+def find_peaks(x: np.ndarray, prominence: float = 0.0) -> np.ndarray:
+    """Indices of the local maxima of ``x`` (1-D) whose prominence is at least
+    ``prominence``: what ``scipy.signal.find_peaks(x, prominence=...)[0]`` gives (a
+    plateau's peak at its middle, rounded down; the prominence the peak's height above
+    the higher of the lowest points on either side before the signal rises above it),
+    written here because importing ``scipy.signal`` takes 0.6 s, a quarter of a head's
+    whole detection (it loads ``scipy.stats``).  A NaN ends a run as it does there.
+
+    >>> find_peaks(np.array([0.0, 2, 1, 3, 3, 3, 0, 0.5, 0.4])).tolist()
+    [1, 4, 7]
+    >>> find_peaks(np.array([0.0, 2, 1, 3, 3, 3, 0, 0.5, 0.4]), prominence=1.0).tolist()
+    [1, 4]
+    """
+    x = np.asarray(x, dtype=np.float64).ravel()
+    n = len(x)
+    if n < 3:
+        return np.zeros(0, dtype=np.intp)
+    # a peak starts where the signal rises and ends where the run of equal values after
+    # that falls (a run reaching the last sample is no peak)
+    rise = np.flatnonzero(x[:-2] < x[1:-1]) + 1
+    change = np.flatnonzero(x[1:] != x[:-1]) + 1
+    nxt = np.searchsorted(change, rise, side="right")
+    ahead = np.full(len(rise), n - 1)
+    inside = nxt < len(change)
+    ahead[inside] = np.minimum(change[nxt[inside]], n - 1)
+    keep = x[ahead] < x[rise]
+    peaks = (rise[keep] + ahead[keep] - 1) // 2
+    if prominence <= 0 or not len(peaks):
+        return peaks.astype(np.intp)
+    out = []
+    for p in peaks:             # a few peaks per profile
+        h = x[p]
+        blocked = ~(x <= h)     # higher, or NaN
+        left = np.flatnonzero(blocked[:p])
+        right = np.flatnonzero(blocked[p + 1:])
+        lo = left[-1] + 1 if len(left) else 0
+        hi = p + 1 + right[0] if len(right) else n
+        base = max(x[lo:p + 1].min(), x[p:hi].min())
+        if h - base >= prominence:
+            out.append(p)
+    return np.asarray(out, dtype=np.intp)
+
+
 def profile_points(prof: Profile, eye_y: float, lips_ok=None) -> dict:
     """Mid-line points read off the profile (template frame), walking down from the eye
     line ``eye_y``: {"9.3", "9.15", "8.1", "2.2", "2.3", "8.2"} where found.
@@ -192,19 +235,18 @@ def profile_points(prof: Profile, eye_y: float, lips_ok=None) -> dict:
       deepest point between the eye line and the nose) to the subnasale: the tip as
       seen square to the nose's own axis, so it does not slide with the head's pitch.
     """
-    from scipy.signal import find_peaks
     y, z = prof.y, prof.z
     order = np.argsort(-y)          # top down
     yy, zz = y[order], z[order]
     start = int(np.searchsorted(-yy, -eye_y))
     out = {}
-    peaks, _ = find_peaks(zz, prominence=0.005)
+    peaks = find_peaks(zz, prominence=0.005)
     peaks = peaks[peaks >= start]
     # the upper lip's front can be all but flat (a philtrum hardly hollow): any bump
     # standing out of a decimated mesh's facets (0.002 ES, 0.13 mm: a fresh ICT draw,
     # seed 2049, had a 0.001 ripple under the nose taken for the lip, 23 % ES0 off); a
     # lip with no bump at all is read from its knee below
-    lip_peaks, _ = find_peaks(zz, prominence=0.002)
+    lip_peaks = find_peaks(zz, prominence=0.002)
     tip = None
     for p in peaks:
         after = zz[p:]
@@ -266,7 +308,7 @@ def profile_points(prof: Profile, eye_y: float, lips_ok=None) -> dict:
     if not deep.any():
         c = d2[span]
         strong = np.flatnonzero((c >= 0.2 * c.max()) & (c > 0))
-        peaks_c, _ = find_peaks(c)
+        peaks_c = find_peaks(c)
         firsts = [p for p in peaks_c if p in set(strong.tolist())]
         up = lo = ul + (firsts[0] if firsts else int(np.argmax(c)))
     if lips_ok is not None and not lips_ok(np.array([0.0, yy[up], zz[up]])):
@@ -280,7 +322,7 @@ def profile_points(prof: Profile, eye_y: float, lips_ok=None) -> dict:
         f = tip + int(fallen[0])
         a0 = tip + int(0.3 / PROFILE_STEP)
         if ul > a0 + 2:
-            pk, _ = find_peaks(d2[a0:ul])
+            pk = find_peaks(d2[a0:ul])
             for p in pk:
                 if d2[a0 + p] > 0 and lips_ok(np.array([0.0, yy[a0 + p], zz[a0 + p]])):
                     up = lo = a0 + p
@@ -310,7 +352,7 @@ def profile_points(prof: Profile, eye_y: float, lips_ok=None) -> dict:
     # behind the chin's rise 0.2 ES below, which a fresh ICT draw, seed 2043, read as
     # the lower lip)
     below = zz[lo:min(lo + int(0.2 / PROFILE_STEP), len(zz) - 1) + 1]
-    bumps, _ = find_peaks(below, prominence=0.0005)
+    bumps = find_peaks(below, prominence=0.0005)
     ll = lo + (int(bumps[0]) if len(bumps) else int(np.argmax(below)))
     end = min(ll + int(0.35 / PROFILE_STEP), len(zz) - 1)
     fold = ll + int(np.argmin(zz[ll:end + 1]))
@@ -322,7 +364,7 @@ def profile_points(prof: Profile, eye_y: float, lips_ok=None) -> dict:
         # steepest fall (its first, of 0.002 ES a step or more above what flanks it):
         # the rim bends over into it, and a chin's edge comes after
         fall = zz[ll:end] - zz[ll + 1:end + 1]
-        steepest, _ = find_peaks(np.nan_to_num(fall), prominence=0.002)
+        steepest = find_peaks(np.nan_to_num(fall), prominence=0.002)
         if len(steepest):
             fold = ll + int(steepest[0]) + 1
     if fold > ll + 2:

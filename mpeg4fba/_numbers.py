@@ -12,7 +12,10 @@ from typing import Union
 
 import numpy as np
 
-__all__ = ["fromstring"]
+__all__ = ["fromstring", "ranges", "EXACT_INT"]
+
+#: Integers below this in size are exact in a float64.
+EXACT_INT = 2.0 ** 53
 
 
 def _raises_on_unmatched() -> bool:
@@ -47,3 +50,18 @@ def fromstring(text: Union[str, bytes, np.ndarray], dtype=np.float64) -> np.ndar
         except DeprecationWarning:
             raise ValueError("string or file could not be read to its end due to "
                              "unmatched data") from None
+
+
+def ranges(starts: np.ndarray, lengths: np.ndarray) -> np.ndarray:
+    """Concatenated ``arange(s, s + l)`` for each start and length, without a loop.
+
+    >>> ranges(np.array([10, 20]), np.array([3, 2])).tolist()
+    [10, 11, 12, 20, 21]
+    """
+    lengths = np.asarray(lengths, dtype=np.int64)
+    total = int(lengths.sum())
+    if not total:
+        return np.zeros(0, dtype=np.int64)
+    before = np.cumsum(lengths) - lengths
+    return np.arange(total, dtype=np.int64) + np.repeat(np.asarray(starts, np.int64) - before,
+                                                        lengths)

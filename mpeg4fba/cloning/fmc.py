@@ -77,7 +77,8 @@ from .correspondence import (ALIGNMENTS, DERIVE_DISTANCE, NECK_RATIO,
 from .errors import CloneWarning, check_choice
 from .lips import LIPS, SIDE_BLEND, SLITS
 from .part_motion import PartMapping
-from .parts import PART_SPECS, find_parts, match_parts, separate_parts, source_transform
+from .part_transforms import source_transform
+from .parts import PART_SPECS, find_parts, match_parts, separate_parts
 from .points import REQUIRED_POINTS, check_faces, required_points_missing
 from .projection import MOUTH_ANGLE
 from .seams import weld_seams

@@ -3,8 +3,8 @@
 
 Pandzic's Facial Motion Cloning, "Treating eyes, teeth, tongue and global motion": the
 Transform that carries each part's motion in the source is found
-(:func:`~mpeg4fba.cloning.parts.source_transform`), the target's Transform for the same
-part too (:func:`~mpeg4fba.cloning.parts.target_transform`), the centres of rotation of
+(:func:`~mpeg4fba.cloning.part_transforms.source_transform`), the target's Transform for the same
+part too (:func:`~mpeg4fba.cloning.part_transforms.target_transform`), the centres of rotation of
 the eyes and the head checked and new ones installed where wrong
 (:class:`TransformInstaller`), and the rotations and translations mapped over
 (:meth:`PartMapping.transform_entries`).  Where we go beyond the paper:
@@ -38,7 +38,8 @@ from scipy.spatial import cKDTree
 
 from ..fba.face import FaceModel, FaceTransform
 from ..fba.fat import FaceDefTable, FaceDefTransform, interval_weights
-from .parts import HEAD, PART_SPECS, lowest_common_transform, target_transform
+from .part_transforms import lowest_common_transform, target_transform
+from .parts import HEAD, PART_SPECS
 from .rigid import axis_angle, fit_rigid, rotation_centre, sphere_centre
 from .skin import Skin, linear_part, stack_meshes
 from .transfer import mesh_entries

@@ -93,10 +93,10 @@ from mpeg4fba.cloning import FacialMotionCloner  # noqa: E402
 from mpeg4fba.cloning.surface import closest_points  # noqa: E402
 from mpeg4fba.fba.featurepoints import FeaturePointSet  # noqa: E402
 from benchmarks.find_points_report import (GOALS, GROUPS, LANDMARK_IDS, NOISE_MM,  # noqa: E402,F401
-                                           ON_SURFACE, case_name, report_cloning,
+                                           ON_SURFACE, case_name, fmt, point_rows, report_cloning,
                                            report_noise, report_plausibility,
                                            report_points, report_raised, report_time,
-                                           snap_options, stats)
+                                           snap_options, stats, worst_of)
 
 #: The fixed regression draw: one case seed per identity (identity weights, decimation
 #: fraction and the four placements all follow from it).  Chosen once, never tuned.

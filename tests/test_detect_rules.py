@@ -290,12 +290,12 @@ def test_the_eye_corners_do_not_follow_the_depth_grids_phase():
     assert (spread[F.EYE_PHASES] < 0.5 * spread[1]).all()
 
 
-def _two_eyes(inner: float, outer: float, y0: float = 0.0):
+def _two_eyes(inner: float, outer: float, y0: float = 0.0, height: float = 0.1):
     """A flat skin (z = 1) with a rectangular opening per eye from |x| = ``inner`` to
-    ``outer``, 0.1 tall round y = ``y0``, and the template's eyes at y = 0."""
+    ``outer``, ``height`` tall round y = ``y0``, and the template's eyes at y = 0."""
     V, T = _grid(np.arange(-1.0, 1.0, 0.01), np.arange(-0.7, 0.5, 0.01), lambda X, Y: X * 0 + 1.0)
     c = V[T].mean(1)
-    hole = (np.abs(c[:, 0]) > inner) & (np.abs(c[:, 0]) < outer) & (np.abs(c[:, 1] - y0) < 0.05)
+    hole = (np.abs(c[:, 0]) > inner) & (np.abs(c[:, 0]) < outer) & (np.abs(c[:, 1] - y0) < height / 2)
     tpl = SimpleNamespace(points={"3.7": np.array([0.65, 0, 1.0]), "3.11": np.array([0.27, 0, 1.0]),
                                   "3.12": np.array([-0.65, 0, 1.0]), "3.8": np.array([-0.27, 0, 1.0])})
     return V, T[~hole], tpl
@@ -466,3 +466,28 @@ def test_no_module_imports_scipy_signal():
                 names = [f"scipy.{a.name}" for a in node.names]
             found += [f"{path.name}:{node.lineno}" for n in names if n.startswith("scipy.signal")]
     assert found == []
+
+
+def test_an_eye_shut_but_for_a_gap_at_one_end_is_no_eye_opening():
+    """What a shut eye leaves open at one end (a fresh ICT draw's eyeBlink at 1: 0.15-0.17
+    eye separations wide, 0.02-0.03 tall) is not read as the eye's opening, whose ends
+    would be taken for its corners; an open eye's is 0.24 wide or more, or, where a coarse
+    mesh bridges its ends, narrower but half as tall as wide."""
+    every = {"3.7", "3.11", "3.1", "3.3", "3.12", "3.8", "3.2", "3.4"}
+    V, T, tpl = _two_eyes(0.55 - 0.16, 0.55, height=0.03)
+    assert F.eye_points(V, T, tpl) == {}
+    V, T, tpl = _two_eyes(0.55 - 0.25, 0.55, height=0.03)
+    assert set(F.eye_points(V, T, tpl)) == every
+    V, T, tpl = _two_eyes(0.55 - 0.18, 0.55, height=0.09)
+    assert set(F.eye_points(V, T, tpl)) == every
+
+
+def test_nearly_shut_eyes_are_told_from_open_ones():
+    V, T, tpl = _two_eyes(0.3, 0.62)                   # 0.1 tall, 0.32 wide: open
+    assert F.shut_eyes(F.eye_points(V, T, tpl)) == {}
+    V, T = _grid(np.arange(-1.0, 1.0, 0.01), np.arange(-0.7, 0.5, 0.01), lambda X, Y: X * 0 + 1.0)
+    c = V[T].mean(1)
+    slit = (np.abs(c[:, 0]) > 0.3) & (np.abs(c[:, 0]) < 0.62) & (np.abs(c[:, 1]) < 0.02)
+    got = F.shut_eyes(F.eye_points(V, T[~slit], tpl))
+    assert set(got) == {"left eye", "right eye"}
+    assert all(r < F.EYE_SHUT_RATIO for r in got.values())

@@ -390,6 +390,24 @@ def test_closed_eyes_are_said_and_their_lid_points_flagged(whole_found):
     assert whole_found.notes == ()                          # the open eyes: nothing said
 
 
+def test_nearly_shut_eyes_are_read_and_said():
+    # the upper lids lowered by the head's own eyelid FAPs until the openings are a sixth
+    # as tall as wide: the lids are read where they are, and the note says the eyes are
+    # nearly shut (MPEG-4's neutral has them open), on each lid point too
+    head = reference_head(resolution=0.5)
+    posed = head.pose({"close_t_l_eyelid": 600, "close_t_r_eyelid": 600})
+    shut = head.copy()
+    shut.meshes["Skin"] = FaceMesh("Skin", posed.vertices("Skin")[0], head.meshes["Skin"].triangles,
+                                   head.meshes["Skin"].parent)
+    shut.points, shut.fat, shut.colors = FeaturePointSet(), FAT(), {}
+    found = find_feature_points(shut)
+    assert any("the left eye and the right eye are nearly shut" in n for n in found.notes)
+    assert not any("no eye opening" in n for n in found.notes)
+    assert all("nearly shut" in found.reasons[k] for k in ("3.1", "3.2", "3.3", "3.4"))
+    P = found.points
+    assert P["3.1"][1] - P["3.3"][1] < 0.2 * abs(P["3.7"][0] - P["3.11"][0])
+
+
 def test_eyeballs_away_from_the_eyes_found_say_the_face_was_misread(whole_found):
     from mpeg4fba.cloning import misread
     # the eyes' lids found a whole eye separation above their eyeballs

@@ -35,8 +35,10 @@ Steps 1-3 are :mod:`~mpeg4fba.cloning.headframe`'s, 4 :mod:`~mpeg4fba.cloning.mi
    a hole, or the skin's edge round an eyeball that is another piece): corners at its lateral ends (the inner one where the groove beyond it
    ends), lid middles at its top and bottom, on the lid margin's front edge.  An eye
    with no opening seen (closed lids, as scans are often taken, or an eyeball joined to
-   them) keeps the fitted template's lids, said in a note and on each point, at a
-   confidence of at most :data:`GUESSED_CONFIDENCE`.
+   them), or only a shut eye's gap (:data:`~mpeg4fba.cloning.frontview.EYE_GAP`),
+   keeps the fitted template's lids, said in a note and on each point, at a
+   confidence of at most :data:`GUESSED_CONFIDENCE`; an eye whose lids are nearly shut
+   (:data:`~mpeg4fba.cloning.frontview.EYE_SHUT_RATIO`) is read and said to be.
 6. **Mouth** (:func:`~mpeg4fba.cloning.frontview.mouth_points`): the lips' contact
    groove seen from the front, followed from the stomion: commissures at its ends, inner corners and inner-lip
    midpoints along it.
@@ -259,6 +261,14 @@ def find_feature_points(face: FaceModel, *, ids: Optional[Iterable[str]] = None)
                      "or an eyeball joined to them): the lid points there are the fitted "
                      "template's open lids, not read off the geometry; MPEG-4's neutral face "
                      "has its eyes open, and eyelid FAPs move the lids from where they are")
+    shut = frontview.shut_eyes(eye_pts)
+    if shut:
+        notes.append(f"the {' and the '.join(shut)} {'is' if len(shut) == 1 else 'are'} nearly shut "
+                     f"(lids {', '.join(f'{r:.2f}' for r in shut.values())} of the eye's width "
+                     "apart): the lid points are read where the lids are; MPEG-4's neutral face "
+                     "has its eyes open, the upper lid touching the iris, and eyelid FAPs move "
+                     "the lids from where they are: open the eyes in the head for the "
+                     "standard's neutral")
     open_mouth = "2.2" in prof_pts and prof_pts["2.2"][1] - prof_pts["2.3"][1] > midline.SLIT_LIMIT
     if open_mouth:
         gap = float(prof_pts["2.2"][1] - prof_pts["2.3"][1])
@@ -276,6 +286,9 @@ def find_feature_points(face: FaceModel, *, ids: Optional[Iterable[str]] = None)
     if open_mouth:               # (shown on its points in the editor)
         for k in ("2.2", "2.3"):
             reasons[k] = "the lips are apart here: an open mouth (MPEG-4's neutral has them closed)"
+    for eye in shut:
+        for k in frontview.EYE_KEYS[eye][2:]:
+            reasons[k] = "a nearly shut eye's lid, read where it is (MPEG-4's neutral has it open)"
     guessed = [k for eye in unseen for k in frontview.EYE_KEYS[eye]]
     for k in guessed:
         reasons[k] = "no eye opening seen here: where the fitted template puts its open lids"

@@ -18,7 +18,8 @@ import numpy as np
 __all__ = ["depth_map", "front_at", "groove", "mouth", "mouth_points", "eye_points",
            "eye_opening", "DEPTH_CELL", "INNER_CORNER", "EYE_KEYS", "PUPIL_OPENINGS",
            "INNER_CANTHAL_RATIO",
-           "INNER_CANTHAL_BAND", "front_samples", "MOUTH_PHASES", "EYE_PHASES"]
+           "INNER_CANTHAL_BAND", "front_samples", "MOUTH_PHASES", "EYE_PHASES", "EYE_GAP",
+           "EYE_SHUT_RATIO", "shut_eyes"]
 
 
 #: Cell size (eye separations) of the front-view depth maps of the eyes: 0.01 ES.
@@ -373,6 +374,25 @@ def eye_points(Vt: np.ndarray, T: np.ndarray, tpl) -> dict:
     return out
 
 
+def shut_eyes(points: dict) -> dict:
+    """{eye name: height over width} of the eyes read (:func:`eye_points`) whose lids'
+    middles are less than :data:`EYE_SHUT_RATIO` of the corners' width apart.
+
+    >>> p = {"3.7": np.array([0.6, 0, 0]), "3.11": np.array([0.3, 0, 0]),
+    ...      "3.1": np.array([0.45, 0.02, 0]), "3.3": np.array([0.45, -0.01, 0])}
+    >>> {k: round(v, 2) for k, v in shut_eyes(p).items()}
+    {'left eye': 0.1}
+    """
+    out = {}
+    for name, (outer, inner, top, bottom) in EYE_KEYS.items():
+        if all(k in points for k in (outer, inner, top, bottom)):
+            width = abs(points[outer][0] - points[inner][0])
+            ratio = float((points[top][1] - points[bottom][1]) / width) if width > 0 else 0.0
+            if ratio < EYE_SHUT_RATIO:
+                out[name] = ratio
+    return out
+
+
 def _groove_end(D: np.ndarray, i: int, j: int, step: int, reach: int = 3,
                 depth: float = 0.01) -> Optional[tuple]:
     """Following the groove of the depth map ``D`` (front-view z, -inf where empty) from
@@ -397,6 +417,24 @@ def _groove_end(D: np.ndarray, i: int, j: int, step: int, reach: int = 3,
             break
         last, j = (i, jb), jb
     return last
+
+
+#: (width, thinness): an opening narrower than this (eye separations) and less tall than
+#: this fraction of its width is what an eye shut but for a gap leaves open, not the eye's
+#: opening: ICT's eyeBlink at 1 left 0.15-0.17 wide, 0.02-0.03 tall at one end of the eye
+#: on three of six people of a fresh draw (seed 4949), whose ends were then read as the
+#: corners (one 19 % of the eye distance off, nothing said).  An open eye's opening seen
+#: from the front is 0.24-0.37 wide on the 160 heads of the regression draw, full and
+#: decimated (median 0.33); where a coarse mesh bridges its ends it can be 0.18-0.19 (fresh
+#: draw 4901, decimated), but then half as tall as wide.  A gap counts as a shut eye (the
+#: template's lids, said).
+EYE_GAP = (0.2, 1 / 3)
+
+#: Below this height of the lids' middles apart for the corners' width (3.1 - 3.3 over 3.7
+#: - 3.11), an eye read is said to be nearly shut: 0.28-0.45 on the regression draw's 160
+#: open eyes (median 0.38); ICT's eyeBlink at 0.8 leaves openings a tenth to a fifth as
+#: tall as wide.
+EYE_SHUT_RATIO = 0.2
 
 
 #: On how many phases of the depth map's grid :func:`eye_opening` reads an eye (as
@@ -437,7 +475,7 @@ def _eye_opening_once(Vt: np.ndarray, T: np.ndarray, centre: np.ndarray, left: b
 
     The opening is the connected empty part of the front-view depth map
     (:func:`depth_map`, skin only: an eyeball is another piece) nearest the centre, 0.15
-    to 0.6 ES wide and less tall than wide; its corners are its lateral extremes, its lid
+    to 0.6 ES wide and less tall than wide, and not a shut eye's gap (:data:`EYE_GAP`); its corners are its lateral extremes, its lid
     middles the top and bottom of its column half way between them, each taken on the
     skin just outside the opening (the most forward surface there: the lid margin's front
     edge, not the hole's boundary, which can lie a fifth of an eye separation deeper).
@@ -462,6 +500,8 @@ def _eye_opening_once(Vt: np.ndarray, T: np.ndarray, centre: np.ndarray, left: b
         w = (ii.max() - ii.min() + 1) * DEPTH_CELL
         h = (jj.max() - jj.min() + 1) * DEPTH_CELL
         if not (0.15 <= w <= 0.6 and h < w):
+            continue
+        if w < EYE_GAP[0] and h < EYE_GAP[1] * w:      # a shut eye's gap
             continue
         dd = np.hypot(ii.mean() - ci, jj.mean() - cj)
         if dd < best_d:

@@ -251,24 +251,7 @@ def find_feature_points(face: FaceModel, *, ids: Optional[Iterable[str]] = None)
     prof_pts = midline.profile_points(
         prof, 0.0, lambda p: bool(frontview.mouth_points(Vt, ST, p, phases=1)))
     eye_pts = frontview.eye_points(Vt, ST, tpl)
-    notes = []
-    # an eye with no opening seen from the front: closed lids (scans are often taken with
-    # the eyes shut) or an eyeball joined to them; its lid points are then the fitted
-    # template's open lids (a closed ICT eye's upper lid 10 % of the eye distance high)
-    unseen = [eye for eye, keys in frontview.EYE_KEYS.items() if keys[2] not in eye_pts]
-    if unseen:
-        notes.append(f"no eye opening seen at the {' and the '.join(unseen)} (closed lids, "
-                     "or an eyeball joined to them): the lid points there are the fitted "
-                     "template's open lids, not read off the geometry; MPEG-4's neutral face "
-                     "has its eyes open, and eyelid FAPs move the lids from where they are")
-    shut = frontview.shut_eyes(eye_pts)
-    if shut:
-        notes.append(f"the {' and the '.join(shut)} {'is' if len(shut) == 1 else 'are'} nearly shut "
-                     f"(lids {', '.join(f'{r:.2f}' for r in shut.values())} of the eye's width "
-                     "apart): the lid points are read where the lids are; MPEG-4's neutral face "
-                     "has its eyes open, the upper lid touching the iris, and eyelid FAPs move "
-                     "the lids from where they are: open the eyes in the head for the "
-                     "standard's neutral")
+    unseen, notes, reasons = frontview.eye_findings(eye_pts)
     open_mouth = "2.2" in prof_pts and prof_pts["2.2"][1] - prof_pts["2.3"][1] > midline.SLIT_LIMIT
     if open_mouth:
         gap = float(prof_pts["2.2"][1] - prof_pts["2.3"][1])
@@ -282,16 +265,10 @@ def find_feature_points(face: FaceModel, *, ids: Optional[Iterable[str]] = None)
                                                prof_pts["2.2"][1] - prof_pts["2.3"][1])
         eye_pts.update(mouth_pts)
     X = _register(tpl, Vt, ST, {**prof_pts, **eye_pts})
-    reasons: dict = {}
     if open_mouth:               # (shown on its points in the editor)
         for k in ("2.2", "2.3"):
             reasons[k] = "the lips are apart here: an open mouth (MPEG-4's neutral has them closed)"
-    for eye in shut:
-        for k in frontview.EYE_KEYS[eye][2:]:
-            reasons[k] = "a nearly shut eye's lid, read where it is (MPEG-4's neutral has it open)"
     guessed = [k for eye in unseen for k in frontview.EYE_KEYS[eye]]
-    for k in guessed:
-        reasons[k] = "no eye opening seen here: where the fitted template puts its open lids"
     pos: dict = {}       # id -> template-frame position on the target
     tie: dict = {}       # id -> stacked vertex index
     resid: dict = {}

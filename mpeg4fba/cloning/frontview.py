@@ -19,7 +19,7 @@ __all__ = ["depth_map", "front_at", "groove", "mouth", "mouth_points", "eye_poin
            "eye_opening", "DEPTH_CELL", "INNER_CORNER", "EYE_KEYS", "PUPIL_OPENINGS",
            "INNER_CANTHAL_RATIO",
            "INNER_CANTHAL_BAND", "front_samples", "MOUTH_PHASES", "EYE_PHASES", "EYE_GAP",
-           "EYE_SHUT_RATIO", "shut_eyes"]
+           "EYE_SHUT_RATIO", "shut_eyes", "eye_findings"]
 
 
 #: Cell size (eye separations) of the front-view depth maps of the eyes: 0.01 ES.
@@ -391,6 +391,39 @@ def shut_eyes(points: dict) -> dict:
             if ratio < EYE_SHUT_RATIO:
                 out[name] = ratio
     return out
+
+
+def eye_findings(points: dict) -> tuple:
+    """(eyes with no opening seen, notes, id -> reason) for the eyes read
+    (:func:`eye_points`): an eye with no opening seen from the front (closed lids, as scans
+    are often taken, or an eyeball joined to them; its lid points are then the fitted
+    template's open lids: a closed ICT eye's upper lid 10 % of the eye distance high), and
+    one read nearly shut (:func:`shut_eyes`), each said in a note and on its points.
+
+    >>> unseen, notes, reasons = eye_findings({})
+    >>> unseen, notes[0][:40], reasons["3.1"][:25]
+    (['left eye', 'right eye'], 'no eye opening seen at the left eye and ', 'no eye opening seen here:')
+    """
+    unseen = [eye for eye, keys in EYE_KEYS.items() if keys[2] not in points]
+    notes, reasons = [], {}
+    if unseen:
+        notes.append(f"no eye opening seen at the {' and the '.join(unseen)} (closed lids, "
+                     "or an eyeball joined to them): the lid points there are the fitted "
+                     "template's open lids, not read off the geometry; MPEG-4's neutral face "
+                     "has its eyes open, and eyelid FAPs move the lids from where they are")
+        reasons.update({k: "no eye opening seen here: where the fitted template puts its open lids"
+                        for eye in unseen for k in EYE_KEYS[eye]})
+    shut = shut_eyes(points)
+    if shut:
+        notes.append(f"the {' and the '.join(shut)} {'is' if len(shut) == 1 else 'are'} nearly "
+                     f"shut (lids {', '.join(f'{r:.2f}' for r in shut.values())} of the eye's "
+                     "width apart): the lid points are read where the lids are; MPEG-4's neutral "
+                     "face has its eyes open, the upper lid touching the iris, and eyelid FAPs "
+                     "move the lids from where they are: open the eyes in the head for the "
+                     "standard's neutral")
+        reasons.update({k: "a nearly shut eye's lid, read where it is (MPEG-4's neutral has it open)"
+                        for eye in shut for k in EYE_KEYS[eye][2:]})
+    return unseen, notes, reasons
 
 
 def _groove_end(D: np.ndarray, i: int, j: int, step: int, reach: int = 3,

@@ -465,8 +465,8 @@ EYE_GAP = (0.2, 1 / 3)
 
 #: Below this height of the lids' middles apart for the corners' width (3.1 - 3.3 over 3.7
 #: - 3.11), an eye read is said to be nearly shut: 0.28-0.45 on the regression draw's 160
-#: open eyes (median 0.38); ICT's eyeBlink at 0.8 leaves openings a tenth to a fifth as
-#: tall as wide.
+#: open eyes (median 0.38), 0.09-0.17 with ICT's eyeBlink at 0.8 (five of six people of a
+#: fresh draw, seed 4949; the sixth's eyes then show no opening).
 EYE_SHUT_RATIO = 0.2
 
 
@@ -508,8 +508,9 @@ def _eye_opening_once(Vt: np.ndarray, T: np.ndarray, centre: np.ndarray, left: b
 
     The opening is the connected empty part of the front-view depth map
     (:func:`depth_map`, skin only: an eyeball is another piece) nearest the centre, 0.15
-    to 0.6 ES wide and less tall than wide, and not a shut eye's gap (:data:`EYE_GAP`); its corners are its lateral extremes, its lid
-    middles the top and bottom of its column half way between them, each taken on the
+    to 0.6 ES wide and less tall than wide, and not a shut eye's gap (:data:`EYE_GAP`);
+    its corners are its lateral extremes, its lid middles the top and bottom of its
+    column half way between them, each taken on the
     skin just outside the opening (the most forward surface there: the lid margin's front
     edge, not the hole's boundary, which can lie a fifth of an eye separation deeper).
     ``shift`` and ``samples`` as :func:`_mouth_once`'s."""

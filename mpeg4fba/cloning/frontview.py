@@ -411,8 +411,8 @@ def eye_findings(points: dict) -> tuple:
                      "or an eyeball joined to them): the lid points there are the fitted "
                      "template's open lids, not read off the geometry; MPEG-4's neutral face "
                      "has its eyes open, and eyelid FAPs move the lids from where they are")
-        reasons.update({k: "no eye opening seen here: where the fitted template puts its open lids"
-                        for eye in unseen for k in EYE_KEYS[eye]})
+        why = "no eye opening seen here: where the fitted template puts its open lids"
+        reasons.update({k: why for eye in unseen for k in EYE_KEYS[eye]})
     shut = shut_eyes(points)
     if shut:
         notes.append(f"the {' and the '.join(shut)} {'is' if len(shut) == 1 else 'are'} nearly "
@@ -421,8 +421,8 @@ def eye_findings(points: dict) -> tuple:
                      "face has its eyes open, the upper lid touching the iris, and eyelid FAPs "
                      "move the lids from where they are: open the eyes in the head for the "
                      "standard's neutral")
-        reasons.update({k: "a nearly shut eye's lid, read where it is (MPEG-4's neutral has it open)"
-                        for eye in shut for k in EYE_KEYS[eye][2:]})
+        why = "a nearly shut eye's lid, read where it is (MPEG-4's neutral has it open)"
+        reasons.update({k: why for eye in shut for k in EYE_KEYS[eye][2:]})
     return unseen, notes, reasons
 
 

@@ -190,7 +190,7 @@ def identity(data: IctData, seed: int, scale: float = 1.0) -> np.ndarray:
 
 
 # -- graph helpers --------------------------------------------------------------------------
-def _adjacency(triangles: np.ndarray, n: int) -> sp.csr_matrix:
+def vertex_adjacency(triangles: np.ndarray, n: int) -> sp.csr_matrix:
     """Symmetric vertex adjacency (n, n) of a triangle list."""
     t = np.asarray(triangles, dtype=np.int64).reshape(-1, 3)
     a = t.ravel()
@@ -201,10 +201,11 @@ def _adjacency(triangles: np.ndarray, n: int) -> sp.csr_matrix:
 
 def _components(triangles: np.ndarray, n: int) -> np.ndarray:
     """Connected component label of every vertex (isolated vertices are their own)."""
-    return connected_components(_adjacency(triangles, n), directed=False)[1]
+    return connected_components(vertex_adjacency(triangles, n), directed=False)[1]
 
 
-def _triangle_normals(vertices: np.ndarray, triangles: np.ndarray) -> np.ndarray:
+def triangle_cross(vertices: np.ndarray, triangles: np.ndarray) -> np.ndarray:
+    """Each triangle's edge cross product (twice its area along its unnormalised normal)."""
     V = np.asarray(vertices, dtype=np.float64)
     T = np.asarray(triangles, dtype=np.int64).reshape(-1, 3)
     return np.cross(V[..., T[:, 1], :] - V[..., T[:, 0], :], V[..., T[:, 2], :] - V[..., T[:, 0], :])
@@ -213,8 +214,8 @@ def _triangle_normals(vertices: np.ndarray, triangles: np.ndarray) -> np.ndarray
 def flipped_triangles(neutral: np.ndarray, animated: np.ndarray, triangles: np.ndarray) -> int:
     """How many triangles' normals turn by more than 90 degrees from ``neutral`` to
     ``animated`` (both (n, 3)); degenerate triangles (zero normal) are not counted."""
-    a = _triangle_normals(neutral, triangles)
-    b = _triangle_normals(animated, triangles)
+    a = triangle_cross(neutral, triangles)
+    b = triangle_cross(animated, triangles)
     return int(np.count_nonzero(np.einsum("ij,ij->i", a, b) < 0))
 
 
@@ -523,11 +524,11 @@ def skin_regions(face: FaceModel) -> dict:
 # modules of their own, which build on this one; their names are found here too, on first
 # use (``ict.placed_face``), where the benchmarks and tests look for them
 _ELSEWHERE = {
-    "ict_decimate": ("_clusters", "decimate", "decimation_report", "ict_face_decimated"),
+    "ict_decimate": ("decimate", "decimation_report", "ict_face_decimated"),
     "ict_landmarks": ("LANDMARK_CONTOUR", "LANDMARK_PICKED_TOLERANCE", "LANDMARK_POINTS",
-                      "LANDMARK_RING", "_arc_half", "_rings", "landmark_points", "landmark_truth"),
+                      "LANDMARK_RING", "landmark_points", "landmark_truth"),
     "ict_placed": ("EYEBALLS", "FACING_AXES", "MAX_TILT", "SCALES", "UP_AXES", "Placement",
-                   "_axis", "cut_at_seams", "jaw_fat", "placed_face", "random_placement"),
+                   "axis_vector", "cut_at_seams", "jaw_fat", "placed_face", "random_placement"),
 }
 _WHERE = {name: module for module, names in _ELSEWHERE.items() for name in names}
 

@@ -14,7 +14,7 @@ from mpeg4fba.fba.face import FaceMesh, FaceModel
 from mpeg4fba.cloning.surface import vertex_normals
 from mpeg4fba.fba.featurepoints import FeaturePointSet
 
-from .ict import IDS_PREFIX, SKIN_FRONT, IctData, _triangle_normals, ict_face
+from .ict import IDS_PREFIX, SKIN_FRONT, IctData, triangle_cross, ict_face
 
 __all__ = ["decimate", "decimation_report", "ict_face_decimated"]
 
@@ -113,7 +113,7 @@ def decimate(vertices: np.ndarray, triangles: np.ndarray, target_fraction: float
     R = rep[label][T]
     ok = (R[:, 0] != R[:, 1]) & (R[:, 1] != R[:, 2]) & (R[:, 2] != R[:, 0])
     R = R[ok]
-    area2 = np.linalg.norm(_triangle_normals(V, R), axis=1)
+    area2 = np.linalg.norm(triangle_cross(V, R), axis=1)
     R = R[area2 > 1e-12 * max(mean_edge, 1e-300) ** 2]
     _, first_of = np.unique(np.sort(R, axis=1), axis=0, return_index=True)
     R = R[np.sort(first_of)]
@@ -137,7 +137,7 @@ def decimation_report(vertices: np.ndarray, triangles: np.ndarray, kept: np.ndar
     kept = np.asarray(kept)
     R = kept[np.asarray(new_triangles)]
     N = vertex_normals(V, T)
-    fn = _triangle_normals(V, R)
+    fn = triangle_cross(V, R)
     flipped = int(np.count_nonzero(np.einsum("ij,ij->i", fn, N[R].sum(axis=1)) < 0))
     n = np.int64(len(V))
 

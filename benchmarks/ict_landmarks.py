@@ -11,7 +11,7 @@ import numpy as np
 
 from mpeg4fba.fba.featurepoints import FeaturePointSet
 
-from .ict import IctData, _adjacency, ict_face, mesh_layout
+from .ict import IctData, vertex_adjacency, ict_face, mesh_layout
 
 __all__ = ["LANDMARK_POINTS", "LANDMARK_CONTOUR", "LANDMARK_RING", "LANDMARK_PICKED_TOLERANCE",
            "landmark_points", "landmark_truth"]
@@ -111,7 +111,7 @@ LANDMARK_PICKED_TOLERANCE = {
 
 def _rings(triangles: np.ndarray, n: int, seeds: Sequence[int], k: int) -> np.ndarray:
     """Vertices within ``k`` mesh edges of ``seeds``."""
-    A = _adjacency(triangles, n)
+    A = vertex_adjacency(triangles, n)
     mask = np.zeros(n, dtype=bool)
     mask[list(seeds)] = True
     for _ in range(k):

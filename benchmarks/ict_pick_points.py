@@ -40,7 +40,7 @@ from scipy.sparse.csgraph import connected_components
 if __package__ in (None, ""):
     sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from benchmarks.ict import (FP_JSON, IctData, _adjacency, ict_face, load_ict,  # noqa: E402
+from benchmarks.ict import (FP_JSON, IctData, vertex_adjacency, ict_face, load_ict,  # noqa: E402
                             line_hits, mesh_layout, spine_top, vertex_normals)
 from mpeg4fba.fba.featurepoints import point_order  # noqa: E402
 
@@ -68,8 +68,8 @@ class Picker:
         skin = self.layout.ids["Skin"]
         self.skin_tris = skin[self.layout.triangles["Skin"]]
         self.N = vertex_normals(self.V, self.skin_tris)
-        self.A = _adjacency(self.skin_tris, data.n_vertices)
-        self.A_all = _adjacency(data.triangles, data.n_vertices)
+        self.A = vertex_adjacency(self.skin_tris, data.n_vertices)
+        self.A_all = vertex_adjacency(data.triangles, data.n_vertices)
         self.lm = data.landmarks
         self.ids: dict = {}
         self.rules: dict = {}

@@ -16,7 +16,7 @@ from mpeg4fba.fba.featurepoints import FeaturePointSet
 from .ict import split_deltas
 
 __all__ = ["Placement", "random_placement", "placed_face", "cut_at_seams", "jaw_fat",
-           "UP_AXES", "FACING_AXES", "SCALES", "MAX_TILT", "EYEBALLS"]
+           "axis_vector", "UP_AXES", "FACING_AXES", "SCALES", "MAX_TILT", "EYEBALLS"]
 
 #: The two supported up axes and, for each, the horizontal axes a face may look along.
 UP_AXES = {"+Y": (0, 1, 0), "+Z": (0, 0, 1)}
@@ -69,7 +69,7 @@ def cut_at_seams(face: FaceModel, mesh: str = "Skin") -> tuple:
     return out, origin
 
 
-def _axis(name: str) -> np.ndarray:
+def axis_vector(name: str) -> np.ndarray:
     v = np.zeros(3)
     v["XYZ".index(name[1])] = 1.0 if name[0] == "+" else -1.0
     return v
@@ -91,7 +91,7 @@ class Placement:
 
     @property
     def rotation(self) -> np.ndarray:
-        up, fwd = _axis(self.up), _axis(self.facing)
+        up, fwd = axis_vector(self.up), axis_vector(self.facing)
         R0 = np.c_[np.cross(up, fwd), up, fwd]          # columns: head x, y, z in the world
         a = np.asarray(self.tilt_axis, dtype=np.float64)
         th = np.radians(self.tilt)

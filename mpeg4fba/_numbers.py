@@ -12,7 +12,7 @@ from typing import Union
 
 import numpy as np
 
-__all__ = ["fromstring", "ranges", "EXACT_INT"]
+__all__ = ["fromstring", "ranges", "number_text", "EXACT_INT"]
 
 #: Integers below this in size are exact in a float64.
 EXACT_INT = 2.0 ** 53
@@ -65,3 +65,12 @@ def ranges(starts: np.ndarray, lengths: np.ndarray) -> np.ndarray:
     before = np.cumsum(lengths) - lengths
     return np.arange(total, dtype=np.int64) + np.repeat(np.asarray(starts, np.int64) - before,
                                                         lengths)
+
+
+def number_text(x: float) -> str:
+    """Shortest text: 25 for 25.0, else repr.
+
+    >>> number_text(25.0), number_text(0.1)
+    ('25', '0.1')
+    """
+    return str(int(x)) if float(x).is_integer() and abs(x) < EXACT_INT else repr(float(x))

@@ -10,12 +10,12 @@ from mpeg4fba.fba.face import FaceMesh, FaceModel
 EXACT = dict(rtol=0, atol=1e-9)
 
 
-def _grid(n: int, z: float = 0.0) -> np.ndarray:
+def grid_vertices(n: int, z: float = 0.0) -> np.ndarray:
     x, y = np.meshgrid(np.linspace(0, 1, n), np.linspace(0, 1, n))
     return np.column_stack([x.ravel(), y.ravel(), np.full(n * n, z)])
 
 
-def _grid_triangles(n: int) -> np.ndarray:
+def grid_triangles(n: int) -> np.ndarray:
     i, j = np.meshgrid(np.arange(n - 1), np.arange(n - 1), indexing="ij")
     a = (i * n + j).ravel()
     return np.concatenate([np.column_stack([a, a + 1, a + n + 1]),
@@ -24,10 +24,10 @@ def _grid_triangles(n: int) -> np.ndarray:
 
 @pytest.fixture
 def neutral() -> dict:
-    return {"Skin": _grid(6), "Teeth": _grid(3, z=-0.1)}
+    return {"Skin": grid_vertices(6), "Teeth": grid_vertices(3, z=-0.1)}
 
 
-def _moved(neutral: dict, seed: int, mesh: str = "Skin", k: int = 5, scale: float = 0.05) -> dict:
+def moved_copy(neutral: dict, seed: int, mesh: str = "Skin", k: int = 5, scale: float = 0.05) -> dict:
     """The neutral with ``k`` vertices of ``mesh`` moved at random."""
     rng = np.random.default_rng(seed)
     out = {name: v.copy() for name, v in neutral.items()}
@@ -36,16 +36,16 @@ def _moved(neutral: dict, seed: int, mesh: str = "Skin", k: int = 5, scale: floa
     return out
 
 
-def _face(neutral: dict, fat) -> FaceModel:
+def face_of(neutral: dict, fat) -> FaceModel:
     return FaceModel([FaceMesh(n, v, np.empty((0, 3))) for n, v in neutral.items()], fat=fat)
 
 
-def _posed(face: FaceModel, faps=None, visemes=None, expressions=None) -> dict:
+def posed_vertices(face: FaceModel, faps=None, visemes=None, expressions=None) -> dict:
     pb = face.pose(faps or {}, visemes=visemes, expressions=expressions)
     return {name: pb.vertices(name)[0] for name in face.meshes}
 
 
-def _assert_shape(got: dict, want: dict) -> None:
+def assert_same_shape(got: dict, want: dict) -> None:
     assert set(got) == set(want)
     for name in want:
         np.testing.assert_allclose(got[name], want[name], **EXACT, err_msg=name)

@@ -19,8 +19,10 @@ from hypothesis import strategies as st
 import mpeg4fba
 from mpeg4fba.cli import main
 from mpeg4fba.fba.stream import FapRangeWarning, FapStream
-from mpeg4fba.formats.fap import (FapError, FapWarning, _decimals, _format_tokens,
-                                  _number_text, dumps_fap, loads_fap, read_fap, write_fap)
+from mpeg4fba._numbers import number_text
+from mpeg4fba.formats.fap import (FapError, FapWarning, _decimals, dumps_fap, loads_fap, read_fap,
+                                  write_fap)
+from mpeg4fba.formats.fap_writer import _format_tokens
 
 REPO = Path(__file__).resolve().parents[1]
 FIXTURES = REPO / "spec_fixtures" / "fap"
@@ -369,7 +371,7 @@ def test_token_formatting_is_shortest_repr(xs):
     sep = np.full(len(x), 32, np.uint8)
     out, lengths = _format_tokens(x, sep)
     words = out.tobytes().decode().split(" ")[:-1]
-    assert words == [_number_text(v) for v in xs]
+    assert words == [number_text(v) for v in xs]
     assert lengths.tolist() == [len(w) + 1 for w in words]
     assert [float(w) for w in words] == xs
 

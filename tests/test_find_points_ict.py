@@ -126,8 +126,8 @@ def test_placements_are_supported_and_undone():
         R = pl.rotation
         assert np.allclose(R @ R.T, np.eye(3)) and np.isclose(np.linalg.det(R), 1.0)
         assert np.allclose(pl.undo(pl.apply(P)), P)
-        up = np.degrees(np.arccos(np.clip(R[:, 1] @ ict._axis(pl.up), -1, 1)))
-        fwd = np.degrees(np.arccos(np.clip(R[:, 2] @ ict._axis(pl.facing), -1, 1)))
+        up = np.degrees(np.arccos(np.clip(R[:, 1] @ ict.axis_vector(pl.up), -1, 1)))
+        fwd = np.degrees(np.arccos(np.clip(R[:, 2] @ ict.axis_vector(pl.facing), -1, 1)))
         assert up <= ict.MAX_TILT + 1e-9 and fwd <= ict.MAX_TILT + 1e-9
         assert pl.scale in ict.SCALES
 

@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from _morph import _assert_shape, _face, _moved, _posed, neutral  # noqa: F401 (fixture)
+from _morph import assert_same_shape, face_of, moved_copy, neutral, posed_vertices  # noqa: F401 (fixture)
 from mpeg4fba.fba.morph import (MorphTarget, MorphTargetWarning, TargetKey,
                                 fat_from_morph_targets, parse_target_name)
 
@@ -83,72 +83,72 @@ def test_morph_target_forms():
 # -- building the FAT ------------------------------------------------------------------------
 
 def test_one_target_is_a_linear_morph(neutral):
-    shape = _moved(neutral, 1)
+    shape = moved_copy(neutral, 1)
     fat = fat_from_morph_targets(neutral, [MorphTarget("open_jaw@1024", None, shape)])
     assert fat.faps == [3] and len(fat) == 1
     (m,) = fat[3].meshes                                   # Teeth does not move
     assert m.mesh == "Skin" and m.borders.tolist() == [0.0, 1024.0]
     moved = np.flatnonzero((shape["Skin"] != neutral["Skin"]).any(axis=1))
     assert m.indices.tolist() == moved.tolist()
-    face = _face(neutral, fat)
-    _assert_shape(_posed(face, {3: 1024}), shape)
+    face = face_of(neutral, fat)
+    assert_same_shape(posed_vertices(face, {3: 1024}), shape)
     half = {n: (neutral[n] + shape[n]) / 2 for n in neutral}
-    _assert_shape(_posed(face, {3: 512}), half)
+    assert_same_shape(posed_vertices(face, {3: 512}), half)
     double = {n: 2 * shape[n] - neutral[n] for n in neutral}
-    _assert_shape(_posed(face, {"open_jaw": 2048}), double)       # extrapolates
-    _assert_shape(_posed(face, {3: -100}), neutral)                # no interval below 0
+    assert_same_shape(posed_vertices(face, {"open_jaw": 2048}), double)       # extrapolates
+    assert_same_shape(posed_vertices(face, {3: -100}), neutral)                # no interval below 0
 
 
 def test_one_negative_target(neutral):
-    shape = _moved(neutral, 2)
+    shape = moved_copy(neutral, 2)
     fat = fat_from_morph_targets(neutral, [MorphTarget("raise_b_midlip", -300, shape)])
     assert fat[5].meshes[0].borders.tolist() == [-300.0, 0.0]
-    face = _face(neutral, fat)
-    _assert_shape(_posed(face, {5: -300}), shape)
-    _assert_shape(_posed(face, {5: -100}), {n: neutral[n] + (shape[n] - neutral[n]) / 3
+    face = face_of(neutral, fat)
+    assert_same_shape(posed_vertices(face, {5: -300}), shape)
+    assert_same_shape(posed_vertices(face, {5: -100}), {n: neutral[n] + (shape[n] - neutral[n]) / 3
                                            for n in neutral})
-    _assert_shape(_posed(face, {5: 100}), neutral)
+    assert_same_shape(posed_vertices(face, {5: 100}), neutral)
 
 
 def test_targets_on_both_sides_and_several_on_one(neutral):
     values = [-600, -200, 300, 1000]
-    shapes = {v: _moved(neutral, 10 + i, k=7) for i, v in enumerate(values)}
+    shapes = {v: moved_copy(neutral, 10 + i, k=7) for i, v in enumerate(values)}
     targets = [MorphTarget(f"lower_t_midlip@{v}", None, shapes[v]) for v in (300, -600, 1000, -200)]
     fat = fat_from_morph_targets(neutral, targets)
     (m,) = fat[4].meshes
     assert m.borders.tolist() == [-600.0, -200.0, 0.0, 300.0, 1000.0]
-    face = _face(neutral, fat)
+    face = face_of(neutral, fat)
     for v in values:
-        _assert_shape(_posed(face, {4: v}), shapes[v])
-    _assert_shape(_posed(face, {4: 0}), neutral)
+        assert_same_shape(posed_vertices(face, {4: v}), shapes[v])
+    assert_same_shape(posed_vertices(face, {4: 0}), neutral)
     # between two targets: a linear blend of the two shapes
     w = (650 - 300) / 700
-    _assert_shape(_posed(face, {4: 650}), {n: (1 - w) * shapes[300][n] + w * shapes[1000][n]
+    assert_same_shape(posed_vertices(face, {4: 650}), {n: (1 - w) * shapes[300][n] + w * shapes[1000][n]
                                           for n in neutral})
     w = (-400 + 200) / -400
-    _assert_shape(_posed(face, {4: -400}), {n: (1 - w) * shapes[-200][n] + w * shapes[-600][n]
+    assert_same_shape(posed_vertices(face, {4: -400}), {n: (1 - w) * shapes[-200][n] + w * shapes[-600][n]
                                            for n in neutral})
-    _assert_shape(_posed(face, {4: 100}), {n: neutral[n] + (shapes[300][n] - neutral[n]) / 3
+    assert_same_shape(posed_vertices(face, {4: 100}), {n: neutral[n] + (shapes[300][n] - neutral[n]) / 3
                                           for n in neutral})
 
 
 def test_visemes_and_expressions(neutral):
-    pp, joy, sad = _moved(neutral, 20), _moved(neutral, 21, mesh="Teeth", k=3), _moved(neutral, 22)
-    jaw = _moved(neutral, 23)
+    pp, joy, sad = moved_copy(neutral, 20), moved_copy(neutral, 21, mesh="Teeth", k=3), moved_copy(neutral, 22)
+    jaw = moved_copy(neutral, 23)
     fat = fat_from_morph_targets(neutral, [
         MorphTarget("viseme:PP", None, pp), MorphTarget("expression_joy", None, joy),
         MorphTarget("expression:2", None, sad), MorphTarget("open_jaw@1000", None, jaw)])
     assert fat.visemes == [1] and fat.expressions == [1, 2] and fat.faps == [3]
     assert fat[1, 1].meshes[0].borders.tolist() == [0.0, 63.0]
     assert [m.mesh for m in fat[2, 1].meshes] == ["Teeth"]
-    face = _face(neutral, fat)
-    _assert_shape(_posed(face, visemes=[1, 0, 63, 0]), pp)
-    _assert_shape(_posed(face, expressions=[1, 63, 0, 0, 0, 0]), joy)
-    _assert_shape(_posed(face, expressions=[2, 63, 0, 0, 0, 0]), sad)
-    _assert_shape(_posed(face, visemes=[1, 0, 21, 0]),
+    face = face_of(neutral, fat)
+    assert_same_shape(posed_vertices(face, visemes=[1, 0, 63, 0]), pp)
+    assert_same_shape(posed_vertices(face, expressions=[1, 63, 0, 0, 0, 0]), joy)
+    assert_same_shape(posed_vertices(face, expressions=[2, 63, 0, 0, 0, 0]), sad)
+    assert_same_shape(posed_vertices(face, visemes=[1, 0, 21, 0]),
                   {n: neutral[n] + (pp[n] - neutral[n]) / 3 for n in neutral})
     # everything adds: viseme + expression + low-level FAP
-    _assert_shape(_posed(face, {3: 1000}, visemes=[1, 0, 63, 0], expressions=[1, 63, 0, 0, 0, 0]),
+    assert_same_shape(posed_vertices(face, {3: 1000}, visemes=[1, 0, 63, 0], expressions=[1, 63, 0, 0, 0, 0]),
                   {n: pp[n] + joy[n] + jaw[n] - 2 * neutral[n] for n in neutral})
 
 
@@ -169,13 +169,13 @@ def test_target_that_moves_nothing_warns(neutral):
 
 
 def test_accepts_a_face_model_as_neutral(neutral):
-    face = _face(neutral, None)
-    fat = fat_from_morph_targets(face, [MorphTarget("open_jaw@10", None, _moved(neutral, 3))])
+    face = face_of(neutral, None)
+    fat = fat_from_morph_targets(face, [MorphTarget("open_jaw@10", None, moved_copy(neutral, 3))])
     assert fat.faps == [3]
 
 
 def test_error_vertex_count(neutral):
-    shape = _moved(neutral, 4)
+    shape = moved_copy(neutral, 4)
     shape["Skin"] = shape["Skin"][:-2]
     with pytest.raises(ValueError) as e:
         fat_from_morph_targets(neutral, [MorphTarget("open_jaw@1024", None, shape)])
@@ -183,7 +183,7 @@ def test_error_vertex_count(neutral):
 
 
 def test_error_mesh_set(neutral):
-    shape = _moved(neutral, 4)
+    shape = moved_copy(neutral, 4)
     del shape["Teeth"]
     shape["Tongue"] = np.zeros((3, 3))
     with pytest.raises(ValueError, match="target 'open_jaw@1024' lacks mesh Teeth and has mesh "
@@ -192,7 +192,7 @@ def test_error_mesh_set(neutral):
 
 
 def test_error_vertex_order(neutral):
-    shape = _moved(neutral, 5)
+    shape = moved_copy(neutral, 5)
     shape["Skin"] = shape["Skin"][np.random.default_rng(0).permutation(36)]
     with pytest.raises(ValueError, match=r"target 'viseme:PP' mesh Skin: .*vertex order differs\?"):
         fat_from_morph_targets(neutral, [MorphTarget("viseme:PP", None, shape)])
@@ -207,7 +207,7 @@ def test_error_vertex_order(neutral):
 
 
 def test_error_duplicates(neutral):
-    a, b = _moved(neutral, 6), _moved(neutral, 7)
+    a, b = moved_copy(neutral, 6), moved_copy(neutral, 7)
     with pytest.raises(ValueError, match="targets 'jaw1' and 'jaw2' are both open_jaw at value 1024"):
         fat_from_morph_targets(neutral, [MorphTarget("open_jaw@1024", None, a, name="jaw1"),
                                          MorphTarget("3@1024", None, b, name="jaw2")])
@@ -217,7 +217,7 @@ def test_error_duplicates(neutral):
 
 
 def test_error_bad_arrays(neutral):
-    shape = _moved(neutral, 8)
+    shape = moved_copy(neutral, 8)
     shape["Skin"] = shape["Skin"].copy()
     shape["Skin"][0, 0] = np.nan
     with pytest.raises(ValueError, match="NaN"):

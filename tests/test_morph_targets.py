@@ -16,7 +16,8 @@ from mpeg4fba.formats.errors import FormatError
 from mpeg4fba.formats.morph_targets import (parse_obj, read_mapping, read_morph_face,
                                             read_morph_targets, target_stem)
 
-from _morph import _assert_shape, _grid, _grid_triangles, _moved, _posed, neutral  # noqa: F401 (fixture)
+from _morph import (assert_same_shape, grid_triangles, grid_vertices, moved_copy,  # noqa: F401
+                    neutral, posed_vertices)  # (neutral: a fixture)
 
 
 # -- OBJ -------------------------------------------------------------------------------------
@@ -99,9 +100,9 @@ def _obj_text(meshes: dict, tris: dict) -> str:
 
 @pytest.fixture
 def obj_set(tmp_path, neutral):
-    tris = {"Skin": _grid_triangles(6), "Teeth": _grid_triangles(3)}
-    shapes = {"open_jaw@1024": _moved(neutral, 30), "raise_b_midlip@-512": _moved(neutral, 31),
-              "viseme_PP": _moved(neutral, 32), "expression_joy": _moved(neutral, 33, "Teeth", 2)}
+    tris = {"Skin": grid_triangles(6), "Teeth": grid_triangles(3)}
+    shapes = {"open_jaw@1024": moved_copy(neutral, 30), "raise_b_midlip@-512": moved_copy(neutral, 31),
+              "viseme_PP": moved_copy(neutral, 32), "expression_joy": moved_copy(neutral, 33, "Teeth", 2)}
     (tmp_path / "neutral.obj").write_text(_obj_text(neutral, tris))
     for stem, shape in shapes.items():
         (tmp_path / f"{stem}.obj").write_text(_obj_text(shape, tris))
@@ -113,38 +114,38 @@ def _check_reproduces(face: FaceModel, shapes: dict) -> None:
     for stem, shape in shapes.items():
         key, value = parse_target_name(stem)
         if key.fap == 1:
-            got = _posed(face, visemes=[key.select, 0, 63, 0])
+            got = posed_vertices(face, visemes=[key.select, 0, 63, 0])
         elif key.fap == 2:
-            got = _posed(face, expressions=[key.select, 63, 0, 0, 0, 0])
+            got = posed_vertices(face, expressions=[key.select, 63, 0, 0, 0, 0])
         else:
-            got = _posed(face, {key.fap: value})
-        _assert_shape(got, shape)
+            got = posed_vertices(face, {key.fap: value})
+        assert_same_shape(got, shape)
 
 
 def test_read_obj_set(obj_set, neutral):
     neutral_path, paths, shapes = obj_set
     base, targets = read_morph_targets(neutral_path, paths)
-    _assert_shape(base, neutral)
+    assert_same_shape(base, neutral)
     assert [t.name for t in targets] == [p.rsplit("/", 1)[1] for p in paths]
     assert [str(t.key) for t in targets] == ["open_jaw", "raise_b_midlip", "viseme:PP",
                                              "expression:joy"]
     face = read_morph_face(neutral_path, paths)
     assert face.name == "neutral" and set(face.meshes) == {"Skin", "Teeth"}
-    assert len(face.meshes["Skin"].triangles) == len(_grid_triangles(6))
+    assert len(face.meshes["Skin"].triangles) == len(grid_triangles(6))
     assert face.fat.faps == [3, 5] and face.fat.visemes == [1] and face.fat.expressions == [1]
     _check_reproduces(face, shapes)
 
 
 def test_read_obj_one_mesh_takes_the_neutral_name(tmp_path):
-    v = _grid(4)
-    body = "".join(f"f {a + 1} {b + 1} {c + 1}\n" for a, b, c in _grid_triangles(4).tolist())
+    v = grid_vertices(4)
+    body = "".join(f"f {a + 1} {b + 1} {c + 1}\n" for a, b, c in grid_triangles(4).tolist())
     (tmp_path / "head.obj").write_text("".join(f"v {x} {y} {z}\n" for x, y, z in v) + body)
     moved = v.copy()
     moved[5] += [0, 0.25, 0]
     (tmp_path / "fap3@100.obj").write_text("".join(f"v {x} {y} {z}\n" for x, y, z in moved) + body)
     face = read_morph_face(tmp_path / "head.obj", [tmp_path / "fap3@100.obj"])
     assert list(face.meshes) == ["head"]
-    _assert_shape(_posed(face, {3: 100}), {"head": moved})
+    assert_same_shape(posed_vertices(face, {3: 100}), {"head": moved})
 
 
 def test_mapping(obj_set, tmp_path, neutral):
@@ -197,7 +198,7 @@ def test_file_errors(obj_set, tmp_path, neutral):
         read_morph_targets(neutral_path, [tmp_path / "open_jaw@10.xyz"])
     # an extra vertex and triangle in the teeth
     bigger = {"Skin": neutral["Skin"], "Teeth": np.vstack([neutral["Teeth"], [[2, 2, 0]]])}
-    tris = {"Skin": _grid_triangles(6), "Teeth": np.vstack([_grid_triangles(3), [[8, 7, 9]]])}
+    tris = {"Skin": grid_triangles(6), "Teeth": np.vstack([grid_triangles(3), [[8, 7, 9]]])}
     (tmp_path / "open_jaw@10.obj").write_text(_obj_text(bigger, tris))
     with pytest.raises(ValueError, match="target 'open_jaw@10.obj' mesh Teeth has 10 vertices, "
                                          "the neutral 9"):
@@ -230,16 +231,16 @@ DEF Head Transform {{
   translation 0 1.5 0 scale 2 2 2
   children [
     Shape {{ geometry DEF Skin IndexedFaceSet {{
-      coord Coordinate {{ point [ {pts(skin)} ] }} coordIndex [ {idx(_grid_triangles(6))} ] }} }}
+      coord Coordinate {{ point [ {pts(skin)} ] }} coordIndex [ {idx(grid_triangles(6))} ] }} }}
     Transform {{ translation 0 -0.2 0 children Shape {{ geometry IndexedFaceSet {{
-      coord Coordinate {{ point [ {pts(teeth)} ] }} coordIndex [ {idx(_grid_triangles(3))} ] }} }} }}
+      coord Coordinate {{ point [ {pts(teeth)} ] }} coordIndex [ {idx(grid_triangles(3))} ] }} }} }}
   ]
 }}
 """
 
 
 def test_read_vrml_set(tmp_path, neutral):
-    shapes = {"open_jaw@800": _moved(neutral, 40), "expression_surprise": _moved(neutral, 41, "Teeth", 3)}
+    shapes = {"open_jaw@800": moved_copy(neutral, 40), "expression_surprise": moved_copy(neutral, 41, "Teeth", 3)}
     (tmp_path / "neutral.wrl").write_text(_wrl(neutral["Skin"], neutral["Teeth"]))
     paths = []
     for stem, s in shapes.items():
@@ -323,12 +324,12 @@ def _gltf(path, meshes: list, embed: bool = False, sparse: bool = False, node_na
 @pytest.fixture
 def gltf_set(neutral):
     pytest.importorskip("pygltflib")
-    jaw, pp, up = _moved(neutral, 50), _moved(neutral, 51), _moved(neutral, 52)
-    meshes = [("Skin", neutral["Skin"], _grid_triangles(6),
+    jaw, pp, up = moved_copy(neutral, 50), moved_copy(neutral, 51), moved_copy(neutral, 52)
+    meshes = [("Skin", neutral["Skin"], grid_triangles(6),
                [("open_jaw@1024", jaw["Skin"] - neutral["Skin"]),
                 ("viseme_PP", pp["Skin"] - neutral["Skin"]),
                 ("raise_b_midlip@-100", up["Skin"] - neutral["Skin"])]),
-              ("Teeth", neutral["Teeth"], _grid_triangles(3), [])]
+              ("Teeth", neutral["Teeth"], grid_triangles(3), [])]
     shapes = {"open_jaw@1024": {"Skin": jaw["Skin"], "Teeth": neutral["Teeth"]},
               "viseme_PP": {"Skin": pp["Skin"], "Teeth": neutral["Teeth"]},
               "raise_b_midlip@-100": {"Skin": up["Skin"], "Teeth": neutral["Teeth"]}}
@@ -358,8 +359,8 @@ def test_read_gltf_morph_targets(tmp_path, gltf_set, suffix, embed, sparse):
     # deltas are added in float64 to float32 positions: compare with float32 tolerance
     for stem, shape in _f32(shapes).items():
         key, value = parse_target_name(stem)
-        got = _posed(face, visemes=[key.select, 0, 63, 0]) if key.fap == 1 else \
-            _posed(face, {key.fap: value})
+        got = posed_vertices(face, visemes=[key.select, 0, 63, 0]) if key.fap == 1 else \
+            posed_vertices(face, {key.fap: value})
         for m in shape:
             np.testing.assert_allclose(got[m], shape[m], rtol=0, atol=1e-6)
 
@@ -382,11 +383,11 @@ def test_gltf_target_names_need_a_mapping(tmp_path, gltf_set, neutral):
 def test_gltf_neutral_with_file_targets(tmp_path, gltf_set, neutral):
     meshes, _ = gltf_set
     _gltf(tmp_path / "head.glb", [m[:3] + ([],) for m in meshes])
-    smile = _moved(neutral, 60)
-    _gltf(tmp_path / "expression_joy.glb", [("Skin", smile["Skin"], _grid_triangles(6), []),
-                                             ("Teeth", smile["Teeth"], _grid_triangles(3), [])])
+    smile = moved_copy(neutral, 60)
+    _gltf(tmp_path / "expression_joy.glb", [("Skin", smile["Skin"], grid_triangles(6), []),
+                                             ("Teeth", smile["Teeth"], grid_triangles(3), [])])
     face = read_morph_face(tmp_path / "head.glb", [tmp_path / "expression_joy.glb"])
-    got = _posed(face, expressions=[1, 63, 0, 0, 0, 0])
+    got = posed_vertices(face, expressions=[1, 63, 0, 0, 0, 0])
     np.testing.assert_allclose(got["Skin"], smile["Skin"], atol=1e-6)
 
 

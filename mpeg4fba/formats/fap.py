@@ -48,11 +48,11 @@ from typing import Optional, Union
 
 import numpy as np
 
-from .._numbers import EXACT_INT, fromstring
+from .._numbers import EXACT_INT, fromstring, number_text
 from ..fba.stream import FapStream
 from ..fba.tables import N_FAPS
 from .errors import FormatError
-from .fap_writer import _format_tokens, _number_text, dumps_fap, write_fap  # noqa: F401
+from .fap_writer import dumps_fap, write_fap  # noqa: F401  (the module's writing half)
 
 __all__ = ["read_fap", "loads_fap", "write_fap", "dumps_fap", "FapError", "FapWarning",
            "VERSIONS"]
@@ -252,7 +252,7 @@ def _parse(data: bytes, path: Optional[str], legacy_divisor: float) -> FapStream
     if n and (frame_no != np.arange(n)).any():
         f = int(np.argmax(frame_no != np.arange(n)))
         _warn(f"frames are not numbered 0..{n - 1} in order (frame "
-              f"{_number_text(frame_no[f])} where {f} was expected); renumbered from 0", path,
+              f"{number_text(frame_no[f])} where {f} was expected); renumbered from 0", path,
               int(value_lines[f]) + 1)
     stream = FapStream(values, mask, fps, visemes, expressions, name=name, version=version)
     # Range warnings, re-issued so that they point at the caller of read_fap/loads_fap.

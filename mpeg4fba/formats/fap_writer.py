@@ -9,7 +9,7 @@ from typing import Union
 import numpy as np
 
 from .._atomic import atomic_write
-from .._numbers import EXACT_INT, ranges
+from .._numbers import EXACT_INT, number_text, ranges
 from ..fba.stream import FapStream
 from ..fba.tables import N_FAPS
 
@@ -44,19 +44,10 @@ def write_fap(stream: FapStream, path: PathLike) -> None:
     atomic_write(os.fspath(path), _dump_bytes(stream))
 
 
-def _number_text(x: float) -> str:
-    """Shortest text: 25 for 25.0, else repr.
-
-    >>> _number_text(25.0), _number_text(0.1)
-    ('25', '0.1')
-    """
-    return str(int(x)) if float(x).is_integer() and abs(x) < EXACT_INT else repr(float(x))
-
-
 def _dump_bytes(stream: FapStream) -> bytes:
     name = "_".join(str(stream.name or "").split()) or "mpeg4fba"
     n = len(stream)
-    head = f"2.1 {name} {_number_text(stream.fps)} {n}\n".encode("utf-8")
+    head = f"2.1 {name} {number_text(stream.fps)} {n}\n".encode("utf-8")
     chunks = [head]
     for a in range(0, n, _CHUNK):
         chunks.append(_frames_bytes(stream, a, min(n, a + _CHUNK)))

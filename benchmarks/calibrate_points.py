@@ -53,7 +53,7 @@ def _seeds(text: str) -> list:
 #: Points carried from the template by the registration (no geometric mark): their
 #: shifts go to TEMPLATE_SHIFT (moving the template's point), the others' to
 #: CONVENTION_SHIFT (moving the found point).
-CARRIED = ("4.1", "4.3", "4.5", "2.11")
+CARRIED = ("2.1", "4.1", "4.3", "4.5", "2.11")
 
 
 def residuals(data, seeds, shift: dict, template_shift: dict) -> dict:
@@ -64,6 +64,7 @@ def residuals(data, seeds, shift: dict, template_shift: dict) -> dict:
     old = convention.CONVENTION_SHIFT, template.TEMPLATE_SHIFT
     convention.CONVENTION_SHIFT, template.TEMPLATE_SHIFT = shift, template_shift
     template.reference_template.cache_clear()
+    template.mirrored_template.cache_clear()
     out: dict = {}
     try:
         for i, seed in enumerate(seeds):
@@ -90,6 +91,7 @@ def residuals(data, seeds, shift: dict, template_shift: dict) -> dict:
     finally:
         convention.CONVENTION_SHIFT, template.TEMPLATE_SHIFT = old
         template.reference_template.cache_clear()
+        template.mirrored_template.cache_clear()
     return out
 
 

@@ -18,7 +18,8 @@ import numpy as np
 from . import frontview, midline
 from .surface import boundary_vertices, closest_points
 
-__all__ = ["TEMPLATE_SHIFT", "PAIRS", "MIRROR", "Template", "reference_template", "shift_anchors",
+__all__ = ["TEMPLATE_SHIFT", "PAIRS", "MIRROR", "Template", "reference_template",
+           "mirrored_template", "shift_anchors",
            "opening_boxes", "opening_landmarks"]
 
 # left/right pairs (the face's left first): mirror partners of the shifts, and the
@@ -29,7 +30,7 @@ PAIRS = (("2.4", "2.5"), ("2.6", "2.7"), ("2.8", "2.9"), ("2.11", "2.12"), ("2.1
           ("5.1", "5.2"), ("5.3", "5.4"), ("8.3", "8.4"), ("8.5", "8.6"), ("8.7", "8.8"),
           ("8.10", "8.9"), ("9.1", "9.2"), ("9.5", "9.4"), ("9.7", "9.6"), ("9.13", "9.14"),
           ("10.1", "10.2"), ("10.3", "10.4"), ("10.5", "10.6"), ("10.7", "10.8"),
-          ("10.9", "10.10"), ("11.2", "11.3"))
+          ("10.9", "10.10"), ("11.2", "11.3"), ("6.3", "6.4"))
 MIRROR = {a: b for a, b in PAIRS} | {b: a for a, b in PAIRS}
 
 
@@ -94,6 +95,39 @@ def reference_template() -> Template:
                      anchors)
 
 
+
+@lru_cache(maxsize=1)
+def mirrored_template() -> Template:
+    """:func:`reference_template` mirrored through its mid plane (x -> -x), each left point
+    and part named as its right partner and back, so that its points are where the
+    template's are.  Its mesh is the template's with the other handedness: the reference
+    head's skin is sampled along a sunflower spiral, which turns one way, and a
+    registration of that mesh onto a symmetric face carries the brows 0.6-1.1 % of the
+    eye separation to the face's left; the mirrored mesh carries them as far to the right.
+
+    >>> t, m = reference_template(), mirrored_template()
+    >>> bool(np.allclose(m.points["4.1"], t.points["4.1"]) and np.allclose(m.V[:, 0], -t.V[:, 0]))
+    True
+    """
+    t = reference_template()
+    flip = np.array([-1.0, 1.0, 1.0])
+    side = {"left": "right", "right": "left"}
+
+    def swap(d: dict, f=lambda v: v) -> dict:
+        return {MIRROR.get(k, k): f(v) for k, v in d.items()}
+
+    # the triangles' corners reversed (outward normals stay outward), their barycentric
+    # weights with them
+    openings = {{"left eye": "right eye", "right eye": "left eye"}.get(n, n):
+                (c * flip, {side.get(k, k): v for k, v in lm.items()})
+                for n, (c, lm) in t.openings.items()}
+    parts = {{"LeftEyeball": "RightEyeball", "RightEyeball": "LeftEyeball"}.get(n, n):
+             (v * flip, tr[:, ::-1].copy()) for n, (v, tr) in t.parts.items()}
+    return Template(t.V * flip, t.T[:, ::-1].copy(), swap(t.points, lambda p: p * flip),
+                    swap(t.skin_index), parts, t.sample, t.face, openings, t.es,
+                    swap(t.profile, lambda p: p * flip), swap(t.eyes, lambda p: p * flip),
+                    swap(t.anchors, lambda a: (a[0], a[1][::-1].copy())))
+
 #: Points no geometry marks, carried from the template by the registration: where on the
 #: template each lies in the landmark convention, as a move of the template's own point
 #: (template frame, eye separations; the face's left, the right mirrored).  The reference
@@ -104,10 +138,11 @@ def reference_template() -> Template:
 #: about the median was 1.8 / 1.8 / 2.1 / 2.0 % ES (4.1 / 4.3 / 4.5 / 2.11) carried,
 #: against 2.3 / 2.8 / 4.5 / 2.5 placed in the eyes' (or chin's and mouth's) frame.
 TEMPLATE_SHIFT: dict = {
-    "2.11": (-0.0427, +0.0548, +0.1436),
-    "4.1": (-0.0343, +0.0805, +0.0159),
-    "4.3": (+0.0594, +0.0617, -0.0403),
-    "4.5": (+0.0893, -0.0113, -0.1524),
+    "2.1": (-0.0032, -0.0217, -0.0160),
+    "2.11": (-0.0432, +0.0261, +0.0931),
+    "4.1": (-0.0343, +0.0816, +0.0158),
+    "4.3": (+0.0620, +0.0619, -0.0417),
+    "4.5": (+0.0922, -0.0101, -0.1548),
 }
 
 

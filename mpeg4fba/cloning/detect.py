@@ -125,7 +125,7 @@ from .template import (MIRROR, Template, mirrored_template, opening_boxes, openi
 from .headframe import FIT_LIMIT, SYMMETRY_LIMIT, FaceNotFoundError
 from .alignment import REQUIRED_POINTS
 from .parts import is_eyeball
-from .registration import register_surface
+from .registration import SPDFactoriser, register_surface
 from .seams import weld_seams
 from .surface import boundary_vertices, closest_points, feature_warp
 
@@ -277,7 +277,8 @@ def find_feature_points(face: FaceModel, *, ids: Optional[Iterable[str]] = None)
         mouth_pts, lip_edges = frontview.mouth(Vt, ST, 0.5 * (prof_pts["2.2"] + prof_pts["2.3"]),
                                                prof_pts["2.2"][1] - prof_pts["2.3"][1])
         eye_pts.update(mouth_pts)
-    X = _register(tpl, Vt, ST, {**prof_pts, **eye_pts})
+    factorise = SPDFactoriser()
+    X = _register(tpl, Vt, ST, {**prof_pts, **eye_pts}, factorise)
     if open_mouth:               # (shown on its points in the editor)
         for k in ("2.2", "2.3"):
             reasons[k] = "the lips are apart here: an open mouth (MPEG-4's neutral has them closed)"
@@ -290,7 +291,7 @@ def find_feature_points(face: FaceModel, *, ids: Optional[Iterable[str]] = None)
     # the template's mesh turns one way (:func:`~mpeg4fba.cloning.template.mirrored_template`):
     # its mirror image is bent onto the target too and the two carry each point half way
     mirrored = mirrored_template()
-    Xm = _register(mirrored, Vt, ST, {**prof_pts, **eye_pts})
+    Xm = _register(mirrored, Vt, ST, {**prof_pts, **eye_pts}, factorise)
     carried = 0.5 * (_carried(tpl, X, skin_points) + _carried(mirrored, Xm, skin_points))
     tri, bary, dist = closest_points(carried, Vt, ST)
     q = np.einsum("nk,nkc->nc", bary, Vt[ST[tri]])
@@ -374,7 +375,8 @@ def _carried(tpl: Template, X: np.ndarray, keys: list) -> np.ndarray:
 
 
 def _register(tpl: Template, Vt: np.ndarray, ST: np.ndarray,
-              profile: Optional[dict] = None) -> np.ndarray:
+              profile: Optional[dict] = None,
+              factorise: Optional[SPDFactoriser] = None) -> np.ndarray:
     """The template's skin bent onto the target's (template frame): started from a warp
     taking the template's mid-line profile points (:func:`~mpeg4fba.cloning.midline.profile_points`, both
     profiles read by the same rules; the nose tip alone without them) and opening
@@ -410,7 +412,7 @@ def _register(tpl: Template, Vt: np.ndarray, ST: np.ndarray,
     if len(keep) >= 1 + 4 * len(tpl.openings):
         start = feature_warp(tpl.V[src], np.array(dst), tpl.V)
     start[src] = np.array(dst)
-    return register_surface(tpl.V, tpl.T, start, src, Vt, ST)
+    return register_surface(tpl.V, tpl.T, start, src, Vt, ST, factorise=factorise)
 
 
 def _refine(Vt, ST, pos, tie, skin_ids, prof_has_tip: bool = False) -> set:

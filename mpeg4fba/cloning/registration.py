@@ -109,6 +109,8 @@ class SPDFactoriser:
     >>> x1, x2 = f(A)(np.ones(3)), f(2 * A)(np.ones(3))
     >>> bool(np.allclose(A @ x1, 1)), bool(np.allclose(2 * A @ x2, 1)), f.reused
     (True, True, 1)
+    >>> f(2 * A) is f(2 * A), f.reused       # a matrix met again: its solver again
+    (True, 1)
     """
 
     def __init__(self) -> None:
@@ -116,12 +118,26 @@ class SPDFactoriser:
         self._order: Optional[np.ndarray] = None
         #: how many factorisations reused the ordering
         self.reused = 0
+        # the solvers of the last few matrices of the pattern, by their values: a
+        # matrix met again (a second fit of the same mesh, or of its mirror image, at
+        # the same scale) is not factorised again
+        self._known: list = []
 
     def __call__(self, A: sp.spmatrix):
         A = sp.csc_matrix(A)
         A.sort_indices()
         pattern = (A.shape, A.indptr.tobytes(), A.indices.tobytes())
+        if pattern == self._pattern:
+            for data, solve in self._known:
+                if np.array_equal(data, A.data):
+                    return solve
+        solve = self._factorise(A, pattern)
+        self._known = [(A.data.copy(), solve)] + self._known[:7]
+        return solve
+
+    def _factorise(self, A: sp.csc_matrix, pattern: tuple):
         if pattern != self._pattern:
+            self._known = []
             lu = spla.splu(A, permc_spec="MMD_AT_PLUS_A", options={"SymmetricMode": True})
             q = np.argsort(lu.perm_c)
             # the permuted pattern, and which of A's entries goes where in it: later

@@ -104,6 +104,10 @@ def mirrored_template() -> Template:
     head's skin is sampled along a sunflower spiral, which turns one way, and a
     registration of that mesh onto a symmetric face carries the brows 0.6-1.1 % of the
     eye separation to the face's left; the mirrored mesh carries them as far to the right.
+    Its skin's triangles keep the template's corner order, so they face inwards (which
+    :func:`~mpeg4fba.cloning.registration.register_surface` takes as it comes) and its
+    registration's system is the template's own to the bit: one factorisation serves
+    both (:class:`~mpeg4fba.cloning.registration.SPDFactoriser`).
 
     >>> t, m = reference_template(), mirrored_template()
     >>> bool(np.allclose(m.points["4.1"], t.points["4.1"]) and np.allclose(m.V[:, 0], -t.V[:, 0]))
@@ -116,17 +120,15 @@ def mirrored_template() -> Template:
     def swap(d: dict, f=lambda v: v) -> dict:
         return {MIRROR.get(k, k): f(v) for k, v in d.items()}
 
-    # the triangles' corners reversed (outward normals stay outward), their barycentric
-    # weights with them
     openings = {{"left eye": "right eye", "right eye": "left eye"}.get(n, n):
                 (c * flip, {side.get(k, k): v for k, v in lm.items()})
                 for n, (c, lm) in t.openings.items()}
     parts = {{"LeftEyeball": "RightEyeball", "RightEyeball": "LeftEyeball"}.get(n, n):
              (v * flip, tr[:, ::-1].copy()) for n, (v, tr) in t.parts.items()}
-    return Template(t.V * flip, t.T[:, ::-1].copy(), swap(t.points, lambda p: p * flip),
+    return Template(t.V * flip, t.T, swap(t.points, lambda p: p * flip),
                     swap(t.skin_index), parts, t.sample, t.face, openings, t.es,
                     swap(t.profile, lambda p: p * flip), swap(t.eyes, lambda p: p * flip),
-                    swap(t.anchors, lambda a: (a[0], a[1][::-1].copy())))
+                    swap(t.anchors))
 
 #: Points no geometry marks, carried from the template by the registration: where on the
 #: template each lies in the landmark convention, as a move of the template's own point

@@ -258,13 +258,16 @@ def find_feature_points(face: FaceModel, *, ids: Optional[Iterable[str]] = None)
     prof_pts = midline.profile_points(
         prof, 0.0, lambda p: bool(frontview.mouth_points(Vt, ST, p, phases=1)))
     # the chin's 2.1 is carried by the registration, not read off the profile and held:
-    # the profile's menton (the reference head's own, on the template) follows where
-    # ICT-FaceKit's landmark 8 sits on a person's chin worse than the bent template does
-    # (spread about the median over the training heads 2.8 against 1.5 % ES), and held
-    # it pulls the chin's corners with it
-    prof_pts.pop("2.1", None)
+    # the profile's menton follows where ICT-FaceKit's landmark 8 sits on a person's chin
+    # worse than the bent template does (spread about the median over the training heads
+    # 2.8 against 1.5 % ES), and held it pulls the chin's corners with it.  A profile
+    # with no chin under its lips is still said.
+    no_chin = prof_pts.pop("2.1", None) is None
     eye_pts = frontview.eye_points(Vt, ST, tpl)
     unseen, notes, reasons = frontview.eye_findings(eye_pts)
+    if no_chin:
+        reasons["2.1"] = ("no clear chin (menton) on the mid line below the lower lip: "
+                          "where the fitted template's chin falls")
     open_mouth = "2.2" in prof_pts and prof_pts["2.2"][1] - prof_pts["2.3"][1] > midline.SLIT_LIMIT
     if open_mouth:
         gap = float(prof_pts["2.2"][1] - prof_pts["2.3"][1])

@@ -53,7 +53,7 @@ def _seeds(text: str) -> list:
 #: Points carried from the template by the registration (no geometric mark): their
 #: shifts go to TEMPLATE_SHIFT (moving the template's point), the others' to
 #: CONVENTION_SHIFT (moving the found point).
-CARRIED = ("2.1", "4.1", "4.3", "4.5", "2.11")
+CARRIED = ("4.1", "4.3", "4.5", "2.11")
 
 
 def residuals(data, seeds, shift: dict, template_shift: dict) -> dict:

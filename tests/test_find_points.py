@@ -5,9 +5,9 @@ ICT-FaceKit head (skipped without ../shared).
 
 Tolerances, in % of the true eye separation (ES0): the skin points of a reference-head
 variant within :data:`TOLERANCE` (median) and :data:`WORST` (any point but those below);
-2.1 (the template's menton, carried: the module docstring) is checked against the
-menton rule, and the mouth's corners and inner-lip points against the lips' contact
-groove, those rules applied to the true mesh; the teeth's root points (9.8, 9.9) and the ears, hair
+2.1 follows the menton convention (the module docstring), and the mouth's corners and
+inner-lip points the lips' contact groove, so they are checked against those rules
+applied to the true mesh; the teeth's root points (9.8, 9.9) and the ears, hair
 line and brows (no geometry defines them on the reference head) are checked loosely
 (:data:`LOOSE`).
 """
@@ -504,8 +504,8 @@ def test_a_mirrored_head_gets_its_points_mirrored():
 
 
 def test_a_head_with_no_chin_says_so_on_its_chin_point():
-    # the skin cut off a little below the lower lip: 2.1 is carried from the template,
-    # so it is still given, with its reason and a low confidence
+    # the skin cut off a little below the lower lip: 2.1 is left where the registration
+    # put it, with its reason and a low confidence
     head = reference_head(resolution=0.5)
     es = float(np.linalg.norm(head.points["3.5"] - head.points["3.6"]))
     cut = head.points["8.2"][1] - 0.15 * es

@@ -76,15 +76,15 @@ def test_points_writes_the_sidecar_with_confidences_and_a_picture(files, found_r
     assert set(conf) == set(pts) and all(0 <= c <= 1 for c in conf.values())
     png = files / "head.png"
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
-    # found where the head has them: the points its geometry marks (not the points
-    # placed by the landmarks' proportions, which the reference head draws by its own;
-    # the mouth's points by its lips' groove, which ends 0.04 ES beyond the corners it
-    # models), in % of the eye distance
+    # found where the head has them: the points its geometry marks (not 2.1, whose rule
+    # is the landmarks' menton, nor the points placed by the landmarks' proportions, which
+    # the reference head draws by its own; the mouth's points by its lips' groove, which
+    # ends 0.04 ES beyond the corners it models), in % of the eye distance
     # (moved as the detector moves them to the landmarks' convention: the head stands
     # upright, so its frame is the template's)
     groove = groove_points(head)
     err = np.array([np.linalg.norm(pts[k] - (groove[k] if k in groove else _in_convention(head, k)))
-                    for k in CRISP_POINTS])
+                    for k in CRISP_POINTS if k != "2.1"])
     assert np.median(err) / es(head) < 0.03, np.median(err) / es(head)
 
 

@@ -89,6 +89,7 @@ def convention_points(Vt: np.ndarray, T: np.ndarray, pos: dict, crisp: set) -> d
 #: rim behind its front edge; an inner lip corner deeper in the contact groove; the
 #: commissure and the nose tip a little above where the geometry marks them.
 CONVENTION_SHIFT: dict = {
+    "2.1": (+0.0000, -0.0186, -0.0157),
     "2.2": (+0.0000, -0.0037, -0.0080),
     "2.3": (+0.0000, +0.0033, -0.0049),
     "2.4": (+0.0002, +0.0100, -0.0187),

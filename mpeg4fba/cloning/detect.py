@@ -27,7 +27,7 @@ Steps 1-3 are :mod:`~mpeg4fba.cloning.headframe`'s, 4 :mod:`~mpeg4fba.cloning.mi
    like a nose: an upper lip as forward as the nose is never taken for it), subnasale,
    the upper lip's front, the lips' meeting (a crease, a slit or an open mouth's parting;
    the crease from which a groove runs the mouth's width), the lower lip's vermilion
-   edge (the menton below it is read too, but not kept: step 8).  A hole in the skin where the nose is is refused
+   edge, the menton.  A hole in the skin where the nose is is refused
    (:data:`~mpeg4fba.cloning.misread.NOSE_SPAN`): read, it put everything below it
    wrong.
 5. **Eyes** (:func:`~mpeg4fba.cloning.frontview.eye_opening`): each eye's opening seen
@@ -53,7 +53,7 @@ Steps 1-3 are :mod:`~mpeg4fba.cloning.headframe`'s, 4 :mod:`~mpeg4fba.cloning.mi
 8. **Convention points** (:mod:`~mpeg4fba.cloning.convention`): the points no geometry
    marks (the outer lips' intermediate points, the nostril base's ends) placed by the
    68-landmark convention's proportions relative to the points found, dropped onto the
-   skin; the brows, the chin and its corners carried from the template
+   skin; the brows and chin corners carried from the template
    (:mod:`~mpeg4fba.cloning.template`) where the convention puts them; every found point
    moved by what the geometric rules miss of the convention.
 9. **Parts**: eyeballs (the pupil: the most forward point of a closed round component in
@@ -70,14 +70,15 @@ centimetres, 1 in millimetres.
 
 Chin convention: 2.1 ("bottom of the chin") is the *menton*, the lowest point of the chin
 on the mid line as seen from the front (the lowest point of the jaw line of a face photo,
-Multi-PIE landmark 8).  It is carried from the template (the reference head's chin,
-read by :func:`~mpeg4fba.cloning.midline.menton`, moved by
-:data:`~mpeg4fba.cloning.template.TEMPLATE_SHIFT` to where the landmark convention puts
-it) and not held in the registration.  Until 2026-12-08 it was read off the mid-plane
-profile (below the chin's front, the first point where the profile falls 45 degrees) and
-held there; ICT-FaceKit's landmark 8 is a fixed vertex of its mesh, and over the
-training heads the bent template followed it with half the rule's spread about the
-median (1.5 against 2.8 % ES), its chin corners 2.11 / 2.12 too (1.7 against 2.1).
+Multi-PIE landmark 8), where the chin's profile turns from facing forward to facing down:
+on the mid-plane profile, below the chin's front, the first point where the profile falls
+45 degrees (:func:`~mpeg4fba.cloning.midline.profile_points`; the chin known by its fall
+of 0.4 eye separations below, its front taken after any stretch of the lower lip's
+underside still falling as steeply;
+:func:`~mpeg4fba.cloning.midline.menton`, the
+same by the surface normals, when the profile has no chin).  The reference head's own 2.1
+lies further back, under the jaw; the landmark convention is what users (and ICT-FaceKit)
+mean and what they can see.
 
 Accuracy today (the issue's goals are median 1.5 / p95 4 / max 8 % ES0), on the 39
 ICT-FaceKit points its 68 landmarks define, on the benchmark's regression draw of 20
@@ -136,11 +137,9 @@ __all__ = ["FaceNotFoundError", "FoundPoints", "find_feature_points", "PART_OF",
 
 #: The points the geometry defines crisply, which :func:`_refine` (and
 #: :func:`~mpeg4fba.cloning.snapping.snap_points`)
-#: move onto that geometry: nose tip, mouth corners and mid lips, eye corners and
-#: lid middles.  (Not the chin's 2.1: where the landmark convention puts it on a chin's
-#: curve differs between people by more than a rule on the geometry follows; it is
-#: carried from the template.)
-CRISP_POINTS = ("2.2", "2.3", "2.4", "2.5", "3.1", "3.2", "3.3", "3.4", "3.7", "3.8",
+#: move onto that geometry: nose tip, chin, mouth corners and mid lips, eye corners and
+#: lid middles.
+CRISP_POINTS = ("2.1", "2.2", "2.3", "2.4", "2.5", "3.1", "3.2", "3.3", "3.4", "3.7", "3.8",
                 "3.11", "3.12", "8.1", "8.2", "8.3", "8.4", "9.3")
 
 
@@ -257,17 +256,8 @@ def find_feature_points(face: FaceModel, *, ids: Optional[Iterable[str]] = None)
     # (whether there is a mouth at p: one phase of the grid says as much as five)
     prof_pts = midline.profile_points(
         prof, 0.0, lambda p: bool(frontview.mouth_points(Vt, ST, p, phases=1)))
-    # the chin's 2.1 is carried by the registration, not read off the profile and held:
-    # the profile's menton follows where ICT-FaceKit's landmark 8 sits on a person's chin
-    # worse than the bent template does (spread about the median over the training heads
-    # 2.8 against 1.5 % ES), and held it pulls the chin's corners with it.  A profile
-    # with no chin under its lips is still said.
-    no_chin = prof_pts.pop("2.1", None) is None
     eye_pts = frontview.eye_points(Vt, ST, tpl)
     unseen, notes, reasons = frontview.eye_findings(eye_pts)
-    if no_chin:
-        reasons["2.1"] = ("no clear chin (menton) on the mid line below the lower lip: "
-                          "where the fitted template's chin falls")
     open_mouth = "2.2" in prof_pts and prof_pts["2.2"][1] - prof_pts["2.3"][1] > midline.SLIT_LIMIT
     if open_mouth:
         gap = float(prof_pts["2.2"][1] - prof_pts["2.3"][1])
@@ -317,7 +307,8 @@ def find_feature_points(face: FaceModel, *, ids: Optional[Iterable[str]] = None)
         near = cKDTree(Vt).query(on)[1]
         for k, p, v in zip(eye_pts, on, near):
             pos[k], tie[k] = p, skin_ids[v]
-    crisp_ok = (_refine(Vt, ST, pos, tie, skin_ids, "9.3" in prof_pts)
+    crisp_ok = (_refine(Vt, ST, pos, tie, skin_ids, reasons, "9.3" in prof_pts,
+                        "2.1" in prof_pts)
                 | set(prof_pts) | set(eye_pts))
     # from the crisp points, or where the registration put them when the geometry had
     # no mark (a mouth without a groove keeps the template's corners)
@@ -418,16 +409,26 @@ def _register(tpl: Template, Vt: np.ndarray, ST: np.ndarray,
     return register_surface(tpl.V, tpl.T, start, src, Vt, ST, factorise=factorise)
 
 
-def _refine(Vt, ST, pos, tie, skin_ids, prof_has_tip: bool = False) -> set:
-    """Move the crisp points the mid-line profile did not find onto the crisp geometry
-    near them (template frame); the ids moved.  Nose tip 9.3: the most forward vertex
-    within 0.25 ES of where the registration put it."""
+def _refine(Vt, ST, pos, tie, skin_ids, reasons, prof_has_tip: bool = False,
+            prof_has_chin: bool = False) -> set:
+    """Move the crisp points onto the crisp geometry near them (template frame); the ids
+    moved.  Nose tip 9.3: the most forward vertex within 0.25 ES of where the registration
+    put it; chin 2.1: the menton rule (module docstring) on the target's skin."""
     done = set()
     near = np.flatnonzero(np.linalg.norm(Vt - pos["9.3"], axis=1) < 0.25)
     if len(near) and not prof_has_tip:
         v = near[np.argmax(Vt[near, 2])]
         pos["9.3"], tie["9.3"] = Vt[v], skin_ids[v]
         done.add("9.3")
+    if "8.2" in pos and not prof_has_chin:
+        m = midline.menton(Vt, ST, {"8.2": pos["8.2"], "2.1": pos["2.1"]})
+        # (with no chin's surface below the lip, menton hands back the 2.1 it was given)
+        if not np.array_equal(m, pos["2.1"]) and np.linalg.norm(m - pos["2.1"]) < 0.5:
+            v = int(np.argmin(np.linalg.norm(Vt - m, axis=1)))
+            pos["2.1"], tie["2.1"] = Vt[v], skin_ids[v]
+            done.add("2.1")
+        else:
+            reasons["2.1"] = "no clear chin (menton) below the lower lip: left where the fit put it"
     return done
 
 

@@ -3,7 +3,7 @@
 points onto the points found, the inner lips' across the mouth's slit only.
 
 >>> SNAP_POINTS[:5], LIP_EDGE_POINTS["2.3"]
-(('2.2', '2.3', '2.4', '2.5', '3.1'), 'lower lip')
+(('2.1', '2.2', '2.3', '2.4', '2.5'), 'lower lip')
 """
 from __future__ import annotations
 

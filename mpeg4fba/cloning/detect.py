@@ -84,17 +84,16 @@ Accuracy today (the issue's goals are median 1.5 / p95 4 / max 8 % ES0), on the 
 ICT-FaceKit points its 68 landmarks define, on the benchmark's regression draw of 20
 random identities (seeds 7301-7320 of the identity modes), each full and decimated to
 25-35 %, with and without eyeballs, randomly turned, tilted and scaled
-(``benchmarks/results/find_points.md``): median 1.49, p95 4.68, max 11.45 % ES0; a
-fresh draw (seed 2030) 1.43 / 4.90 / 11.64; eight fresh draws (seeds 2041-2048, 640
-heads) 1.45 / 4.75 / 15.4, none refused (before 2026-12-06's mending of the rules that
-misread ten of them as a whole and refused four: 1.46 / 4.94 / 333).  By group (median / p95): inner lips 1.14 /
-3.77, outer lips 1.35 / 3.83, nose 1.29 / 4.11, eyes 1.34 / 5.20, brows 2.21 / 5.26, chin
-2.49 / 8.78.  Worst: the chin's 2.1, 2.11 and 2.12 (up to 11.5: ICT's jaw-contour
-landmarks are fixed vertices whose place on the chin's curve differs between people by
-more than any rule on the geometry follows; the error is the same on all four heads of a
-person), the decimated heads' eye corners (median 2.0 against 0.9 on full ones, up to
-9.9: the coarse triangles bridge the opening's ends) and the brows (up to 8: brows are
-hair, not shape).  About 1.7-2 s for a 27,000-vertex ICT head on 2026-12-05's machine.
+(``benchmarks/results/find_points.md``, 2026-12-08): median 1.39, p95 4.53, max 11.45
+% ES0; fresh draws (seeds 5050, 5353, 5454) 1.30-1.42 / 4.47-4.67 / 10.3-12.9, none
+refused.  By group (median / p95): inner lips 1.02 / 3.30, outer lips 1.28 / 3.68, nose
+1.27 / 4.14, eyes 1.20 / 5.03, brows 2.04 / 5.28, chin 2.51 / 8.79.  Worst: the chin's
+2.1, 2.11 and 2.12 (up to 11.5: ICT's jaw-contour landmarks are fixed vertices whose
+place on the chin's curve differs between people by more than any rule on the geometry
+follows; the error is the same on all four heads of a person), the decimated heads'
+eye corners (the coarse triangles bridge the opening's ends) and the brows (up to 8:
+brows are hair, not shape).  About 1.7 s for a 29,000-vertex head on 2026-12-08's
+machine.
 
 Example
 -------

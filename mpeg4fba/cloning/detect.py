@@ -49,7 +49,7 @@ Steps 1-3 are :mod:`~mpeg4fba.cloning.headframe`'s, 4 :mod:`~mpeg4fba.cloning.mi
    template's mesh turns one way (a sunflower spiral's sampling), which carried points
    follow by 0.5-1 % of the eye separation; so its mirror image is bent onto the target
    too, and each point is carried half way between the two
-   (:func:`~mpeg4fba.cloning.template.mirrored_template`).
+   (:func:`~mpeg4fba.cloning.template.bend_template`).
 8. **Convention points** (:mod:`~mpeg4fba.cloning.convention`): the points no geometry
    marks (the outer lips' intermediate points, the nostril base's ends) placed by the
    68-landmark convention's proportions relative to the points found, dropped onto the
@@ -120,14 +120,12 @@ from ..fba.requirements import FAPU_POINTS, PART_POINTS, required_points
 from . import frontview, headframe, midline, misread
 from .frontview import PUPIL_OPENINGS
 from .convention import convention_points, shift_to_convention
-from .template import (MIRROR, Template, mirrored_template, opening_boxes, opening_landmarks,
-                       reference_template)
+from .template import MIRROR, Template, bend_template, reference_template
 from .headframe import FIT_LIMIT, SYMMETRY_LIMIT, FaceNotFoundError
 from .alignment import REQUIRED_POINTS
 from .parts import is_eyeball
-from .registration import SPDFactoriser, register_surface
 from .seams import weld_seams
-from .surface import boundary_vertices, closest_points, feature_warp
+from .surface import boundary_vertices, closest_points
 
 __all__ = ["FaceNotFoundError", "FoundPoints", "find_feature_points", "PART_OF",
            "CRISP_POINTS", "TEMPLATE_ES_MM", "FIT_LIMIT",
@@ -269,8 +267,8 @@ def find_feature_points(face: FaceModel, *, ids: Optional[Iterable[str]] = None)
         mouth_pts, lip_edges = frontview.mouth(Vt, ST, 0.5 * (prof_pts["2.2"] + prof_pts["2.3"]),
                                                prof_pts["2.2"][1] - prof_pts["2.3"][1])
         eye_pts.update(mouth_pts)
-    factorise = SPDFactoriser()
-    X = _register(tpl, Vt, ST, {**prof_pts, **eye_pts}, factorise)
+    skin_points = list(tpl.skin_index)
+    X, carried = bend_template(Vt, ST, {**prof_pts, **eye_pts}, skin_points)
     if open_mouth:               # (shown on its points in the editor)
         for k in ("2.2", "2.3"):
             reasons[k] = "the lips are apart here: an open mouth (MPEG-4's neutral has them closed)"
@@ -278,13 +276,7 @@ def find_feature_points(face: FaceModel, *, ids: Optional[Iterable[str]] = None)
     pos: dict = {}       # id -> template-frame position on the target
     tie: dict = {}       # id -> stacked vertex index
     resid: dict = {}
-    skin_points = [k for k in tpl.skin_index]
     idx = np.array([tpl.skin_index[k] for k in skin_points])
-    # the template's mesh turns one way (:func:`~mpeg4fba.cloning.template.mirrored_template`):
-    # its mirror image is bent onto the target too and the two carry each point half way
-    mirrored = mirrored_template()
-    Xm = _register(mirrored, Vt, ST, {**prof_pts, **eye_pts}, factorise)
-    carried = 0.5 * (_carried(tpl, X, skin_points) + _carried(mirrored, Xm, skin_points))
     tri, bary, dist = closest_points(carried, Vt, ST)
     q = np.einsum("nk,nkc->nc", bary, Vt[ST[tri]])
     corner = cKDTree(Vt).query(q)[1]
@@ -354,58 +346,6 @@ def find_feature_points(face: FaceModel, *, ids: Optional[Iterable[str]] = None)
                        fit={"score": score, "s": s, "R": R, "t": t, "deformed": X,
                             "opening_pupils": opening_pupils},
                        curves={k: inv(c) for k, c in lip_edges.items()}, notes=tuple(notes))
-
-
-def _carried(tpl: Template, X: np.ndarray, keys: list) -> np.ndarray:
-    """Where the template bent to ``X`` puts its skin points ``keys`` (its vertex, or the
-    :data:`~mpeg4fba.cloning.template.TEMPLATE_SHIFT` anchor's place)."""
-    out = X[[tpl.skin_index[k] for k in keys]]
-    for n, k in enumerate(keys):
-        if k in tpl.anchors:
-            a_tri, a_bary = tpl.anchors[k]
-            out[n] = a_bary @ X[tpl.T[a_tri]]
-    return out
-
-
-def _register(tpl: Template, Vt: np.ndarray, ST: np.ndarray,
-              profile: Optional[dict] = None,
-              factorise: Optional[SPDFactoriser] = None) -> np.ndarray:
-    """The template's skin bent onto the target's (template frame): started from a warp
-    taking the template's mid-line profile points (:func:`~mpeg4fba.cloning.midline.profile_points`, both
-    profiles read by the same rules; the nose tip alone without them) and opening
-    extremes (mouth, eyes; those both have) onto the target's, which then hold loosely
-    through the non-rigid registration."""
-    src, dst = [], []
-    profile = profile or {}
-    tip = tpl.skin_index["9.3"]
-    for k, p in profile.items():
-        # the template's point read by the same rule, else its own (the mouth's corners:
-        # the reference head's lips barely crease where they meet)
-        ref = tpl.profile.get(k, tpl.eyes.get(k, tpl.points.get(k)))
-        if ref is not None and k not in ("2.3", "2.8", "2.9"):
-            src.append(int(np.argmin(np.linalg.norm(tpl.V - ref, axis=1))))
-            dst.append(p)
-    if not src:
-        src, dst = [tip], [tpl.V[tip]]
-    edge = boundary_vertices(ST, len(Vt))
-    for name, (c, lm) in tpl.openings.items():
-        if any(k in profile for k in frontview.EYE_KEYS.get(name, ("8.3", "8.4"))):
-            continue                 # the eye's lid margins (mouth's corners) held already
-        got = opening_landmarks(Vt, edge, c, opening_boxes(tpl.points)[name][1])
-        if got is None:
-            continue
-        for k, v in lm.items():
-            src.append(v)
-            dst.append(Vt[got[k]])
-    src, keep = np.unique(np.array(src), return_index=True)
-    dst = [dst[i] for i in keep]
-    start = tpl.V.copy()
-    # a thin-plate warp only when the landmarks surround the face (mouth and both eyes):
-    # from fewer (an eye and the nose) it extrapolates wildly
-    if len(keep) >= 1 + 4 * len(tpl.openings):
-        start = feature_warp(tpl.V[src], np.array(dst), tpl.V)
-    start[src] = np.array(dst)
-    return register_surface(tpl.V, tpl.T, start, src, Vt, ST, factorise=factorise)
 
 
 def _refine(Vt, ST, pos, tie, skin_ids, reasons, prof_has_tip: bool = False,

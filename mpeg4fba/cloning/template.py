@@ -16,10 +16,11 @@ from typing import Optional
 import numpy as np
 
 from . import frontview, midline
-from .surface import boundary_vertices, closest_points
+from .registration import SPDFactoriser, register_surface
+from .surface import boundary_vertices, closest_points, feature_warp
 
 __all__ = ["TEMPLATE_SHIFT", "PAIRS", "MIRROR", "Template", "reference_template",
-           "mirrored_template", "shift_anchors",
+           "mirrored_template", "bend_template", "shift_anchors",
            "opening_boxes", "opening_landmarks"]
 
 # left/right pairs (the face's left first): mirror partners of the shifts, and the
@@ -200,3 +201,66 @@ def opening_landmarks(V: np.ndarray, edge: np.ndarray, centre: np.ndarray,
             <= 1.6 * _WIDTH[bool(half[0] > 0.5)]:
         return None
     return out
+
+
+def bend_template(Vt: np.ndarray, ST: np.ndarray, pins: dict, keys: list) -> tuple:
+    """(X, carried): the template's skin bent onto a head's (``Vt``, ``ST``, template
+    frame; :func:`_bend`), held at the points ``pins`` found on it, and where the
+    template's skin points ``keys`` are carried: half way between where the template and
+    its mirror image (:func:`mirrored_template`) each carry them, the two bends sharing
+    their factorisations.  ``X`` is the template's own bend."""
+    tpl, mirrored = reference_template(), mirrored_template()
+    factorise = SPDFactoriser()
+    X = _bend(tpl, Vt, ST, pins, factorise)
+    Xm = _bend(mirrored, Vt, ST, pins, factorise)
+    return X, 0.5 * (_carried(tpl, X, keys) + _carried(mirrored, Xm, keys))
+
+
+def _carried(tpl: Template, X: np.ndarray, keys: list) -> np.ndarray:
+    """Where the template bent to ``X`` puts its skin points ``keys`` (its vertex, or the
+    :data:`TEMPLATE_SHIFT` anchor's place)."""
+    out = X[[tpl.skin_index[k] for k in keys]]
+    for n, k in enumerate(keys):
+        if k in tpl.anchors:
+            a_tri, a_bary = tpl.anchors[k]
+            out[n] = a_bary @ X[tpl.T[a_tri]]
+    return out
+
+
+def _bend(tpl: Template, Vt: np.ndarray, ST: np.ndarray, profile: dict,
+          factorise: SPDFactoriser) -> np.ndarray:
+    """The template's skin bent onto the target's (template frame): started from a warp
+    taking the template's mid-line profile points (:func:`~mpeg4fba.cloning.midline.profile_points`, both
+    profiles read by the same rules; the nose tip alone without them) and opening
+    extremes (mouth, eyes; those both have) onto the target's, which then hold loosely
+    through the non-rigid registration."""
+    src, dst = [], []
+    tip = tpl.skin_index["9.3"]
+    for k, p in profile.items():
+        # the template's point read by the same rule, else its own (the mouth's corners:
+        # the reference head's lips barely crease where they meet)
+        ref = tpl.profile.get(k, tpl.eyes.get(k, tpl.points.get(k)))
+        if ref is not None and k not in ("2.3", "2.8", "2.9"):
+            src.append(int(np.argmin(np.linalg.norm(tpl.V - ref, axis=1))))
+            dst.append(p)
+    if not src:
+        src, dst = [tip], [tpl.V[tip]]
+    edge = boundary_vertices(ST, len(Vt))
+    for name, (c, lm) in tpl.openings.items():
+        if any(k in profile for k in frontview.EYE_KEYS.get(name, ("8.3", "8.4"))):
+            continue                 # the eye's lid margins (mouth's corners) held already
+        got = opening_landmarks(Vt, edge, c, opening_boxes(tpl.points)[name][1])
+        if got is None:
+            continue
+        for k, v in lm.items():
+            src.append(v)
+            dst.append(Vt[got[k]])
+    src, keep = np.unique(np.array(src), return_index=True)
+    dst = [dst[i] for i in keep]
+    start = tpl.V.copy()
+    # a thin-plate warp only when the landmarks surround the face (mouth and both eyes):
+    # from fewer (an eye and the nose) it extrapolates wildly
+    if len(keep) >= 1 + 4 * len(tpl.openings):
+        start = feature_warp(tpl.V[src], np.array(dst), tpl.V)
+    start[src] = np.array(dst)
+    return register_surface(tpl.V, tpl.T, start, src, Vt, ST, factorise=factorise)

@@ -103,8 +103,9 @@ def _errors(face: FaceModel, found: FoundPoints, truth_face: FaceModel) -> dict:
     # the menton on the true mesh, in the head's own frame (eye line at y = 0, mid plane
     # at x = 0), carried like the others
     src_es, eyes, V, T, prof = _head_frame(truth_face)
-    chin = ((prof["2.1"] if "2.1" in prof else menton(
-        V, T, {k: truth_face.points[k] / src_es - eyes for k in ("8.2", "2.10")})) + eyes) * src_es
+    lip = {k: truth_face.points[k] / src_es - eyes for k in ("8.2", "2.10")}
+    chin = prof["2.1"] if "2.1" in prof else menton(V, T, lip)
+    chin = ((lip["8.2"] if chin is None else chin) + eyes) * src_es
     # the points placed by the 68-landmark convention's proportions (brows, chin corners,
     # outer lips' intermediate points, nostril bases): that rule applied to the true
     # crisp points (the reference head draws those points by conventions of its own,

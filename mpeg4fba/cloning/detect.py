@@ -361,8 +361,7 @@ def _refine(Vt, ST, pos, tie, skin_ids, reasons, prof_has_tip: bool = False,
         done.add("9.3")
     if "8.2" in pos and not prof_has_chin:
         m = midline.menton(Vt, ST, {"8.2": pos["8.2"], "2.1": pos["2.1"]})
-        # (with no chin's surface below the lip, menton hands back the 2.1 it was given)
-        if not np.array_equal(m, pos["2.1"]) and np.linalg.norm(m - pos["2.1"]) < 0.5:
+        if m is not None and np.linalg.norm(m - pos["2.1"]) < 0.5:
             v = int(np.argmin(np.linalg.norm(Vt - m, axis=1)))
             pos["2.1"], tie["2.1"] = Vt[v], skin_ids[v]
             done.add("2.1")

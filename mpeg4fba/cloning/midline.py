@@ -14,6 +14,7 @@ x = 0.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Optional
 
 import numpy as np
 
@@ -24,24 +25,24 @@ __all__ = ["Profile", "profile", "profile_points", "plane_cut", "menton", "PROFI
            "NOSE_FALL"]
 
 
-def menton(V: np.ndarray, T: np.ndarray, pts: dict) -> np.ndarray:
+def menton(V: np.ndarray, T: np.ndarray, pts: dict) -> Optional[np.ndarray]:
     """2.1 by the menton rule on a skin in the head frame (x left, y up, z forward, eye
     separations): on the mid-plane profile below the lower lip (8.2 in ``pts``), the
     lowest point of the first run down the chin of points whose normal points within
     about 20 degrees of 45 degrees between forward and down, and no more than 0.6
     behind the chin's most forward point (so the chin, not the lower lip's underside
-    above it nor the throat behind it)."""
+    above it nor the throat behind it).  None where the skin has no such chin."""
     N = vertex_normals(V, T)
     lip = pts["8.2"]
     band = np.flatnonzero((np.abs(V[:, 0] - lip[0]) < 0.05) & (V[:, 1] < lip[1] - 0.2)
                           & (V[:, 1] > lip[1] - 1.2) & (V[:, 2] > lip[2] - 1.0))
     if not len(band):
-        return pts.get("2.1", lip)
+        return None
     front = V[band, 2].max()
     want = np.array([0.0, -np.sqrt(0.5), np.sqrt(0.5)])
     good = (N[band] @ want > 0.93) & (V[band, 2] > front - 0.6)
     if not good.any():
-        return pts.get("2.1", lip)
+        return None
     # the lowest of the first run of such points down the chin: where the throat meets
     # the chin in a hollow its surface turns through 45 degrees too, and under a jaw
     # opened wide that hollow stands high enough to count (2.1 went 30 % of the eye

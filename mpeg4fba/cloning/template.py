@@ -62,7 +62,9 @@ def reference_template() -> Template:
     pts = {k: head.points[k] / es for k in head.points}
     skin_index = {k: v for k, (m, v) in head.points.vertices.items() if m == "Skin"}
     # the menton convention for 2.1 (module docstring), applied to the template too
-    pts["2.1"] = midline.menton(V, T, pts)
+    chin = midline.menton(V, T, pts)
+    if chin is not None:           # (the reference head has one)
+        pts["2.1"] = chin
     skin_index["2.1"] = int(np.argmin(np.linalg.norm(V - pts["2.1"], axis=1)))
     parts = {}
     for kind, names in (("eye", ("LeftEyeball", "RightEyeball")), ("teeth", ("UpperTeeth", "LowerTeeth")),
